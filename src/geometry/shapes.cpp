@@ -1,0 +1,134 @@
+#include "shapes.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "magnetics/cuboid.h"
+
+namespace magbake::geometry {
+namespace {
+constexpr double kPi = std::numbers::pi;
+constexpr double kTol = 1e-12;  // relative surface tolerance of the inside tests
+}  // namespace
+
+bool BoxShape::contains(const Vec3& p) const {
+  const double t = kTol * half_.maxCoeff();
+  return std::abs(p[0]) <= half_[0] + t && std::abs(p[1]) <= half_[1] + t && std::abs(p[2]) <= half_[2] + t;
+}
+
+MassProperties BoxShape::mass_properties() const {
+  MassProperties mp;
+  mp.volume = volume();
+  const Vec3 s = 2.0 * half_;
+  mp.inertia.diagonal() << s[1] * s[1] + s[2] * s[2], s[0] * s[0] + s[2] * s[2], s[0] * s[0] + s[1] * s[1];
+  mp.inertia *= mp.volume / 12.0;
+  return mp;
+}
+
+bool BoxShape::demag_tensor(const Vec3& p, Mat3& D) const {
+  for (int a = 0; a < 3; ++a) D.col(a) = -magnetics::cuboid_h_field(half_, Vec3::Unit(a), p);
+  return true;
+}
+
+bool SphereShape::demag_tensor(const Vec3& p, Mat3& D) const {
+  if (p.squaredNorm() <= r_ * r_) {
+    D = Mat3::Identity() / 3.0;  // uniform inside a sphere
+  } else {
+    // Outside: the field of the dipole V M.
+    const double d2 = p.squaredNorm(), d = std::sqrt(d2);
+    D = -(volume() / (4.0 * kPi * d2 * d)) * (3.0 * p * p.transpose() / d2 - Mat3::Identity());
+  }
+  return true;
+}
+
+double SphereShape::volume() const { return 4.0 / 3.0 * kPi * r_ * r_ * r_; }
+bool SphereShape::contains(const Vec3& p) const { return p.squaredNorm() <= r_ * r_ * (1.0 + 2 * kTol); }
+MassProperties SphereShape::mass_properties() const {
+  MassProperties mp;
+  mp.volume = volume();
+  mp.inertia = Mat3::Identity() * (0.4 * mp.volume * r_ * r_);
+  return mp;
+}
+
+double CylinderShape::volume() const { return kPi * r_ * r_ * h_; }
+bool CylinderShape::contains(const Vec3& p) const {
+  const double t = kTol * std::max(r_, h_);
+  return p[0] * p[0] + p[1] * p[1] <= (r_ + t) * (r_ + t) && std::abs(p[2]) <= 0.5 * h_ + t;
+}
+MassProperties CylinderShape::mass_properties() const {
+  MassProperties mp;
+  mp.volume = volume();
+  const double ixx = mp.volume * (3.0 * r_ * r_ + h_ * h_) / 12.0;
+  mp.inertia.diagonal() << ixx, ixx, 0.5 * mp.volume * r_ * r_;
+  return mp;
+}
+
+std::shared_ptr<const MeshShape> CylinderShape::triangulate(int n) const {
+  std::vector<Vec3> v;
+  std::vector<Eigen::Vector3i> t;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * kPi * i / n;
+    v.emplace_back(r_ * std::cos(a), r_ * std::sin(a), -0.5 * h_);
+    v.emplace_back(r_ * std::cos(a), r_ * std::sin(a), 0.5 * h_);
+  }
+  const int bottom = static_cast<int>(v.size());
+  v.emplace_back(0, 0, -0.5 * h_);
+  v.emplace_back(0, 0, 0.5 * h_);
+  for (int i = 0; i < n; ++i) {
+    const int j = (i + 1) % n;
+    t.emplace_back(2 * i, 2 * j, 2 * j + 1);
+    t.emplace_back(2 * i, 2 * j + 1, 2 * i + 1);
+    t.emplace_back(bottom, 2 * j, 2 * i);
+    t.emplace_back(bottom + 1, 2 * i + 1, 2 * j + 1);
+  }
+  return std::make_shared<const MeshShape>(std::move(v), std::move(t));
+}
+
+bool CylinderShape::demag_tensor(const Vec3& p, Mat3& D) const {
+  std::call_once(once_, [&] { tessellation_ = triangulate(512); });
+  return tessellation_->demag_tensor(p, D);
+}
+
+std::shared_ptr<const MeshShape> TorusShape::triangulate(int n) const {
+  const int m = std::max(8, n / 2);
+  std::vector<Vec3> v;
+  std::vector<Eigen::Vector3i> t;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * kPi * i / n;
+    for (int j = 0; j < m; ++j) {
+      const double b = 2 * kPi * j / m;
+      const double rho = R_ + r_ * std::cos(b);
+      v.emplace_back(rho * std::cos(a), rho * std::sin(a), r_ * std::sin(b));
+    }
+  }
+  auto id = [&](int i, int j) { return (i % n) * m + (j % m); };
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < m; ++j) {
+      t.emplace_back(id(i, j), id(i + 1, j), id(i + 1, j + 1));
+      t.emplace_back(id(i, j), id(i + 1, j + 1), id(i, j + 1));
+    }
+  }
+  return std::make_shared<const MeshShape>(std::move(v), std::move(t));
+}
+
+bool TorusShape::demag_tensor(const Vec3& p, Mat3& D) const {
+  std::call_once(once_, [&] { tessellation_ = triangulate(384); });
+  return tessellation_->demag_tensor(p, D);
+}
+
+Box3 TorusShape::bounds() const { return Box3(Vec3(-R_ - r_, -R_ - r_, -r_), Vec3(R_ + r_, R_ + r_, r_)); }
+double TorusShape::volume() const { return 2.0 * kPi * kPi * R_ * r_ * r_; }
+bool TorusShape::contains(const Vec3& p) const {
+  const double q = std::hypot(p[0], p[1]) - R_;
+  return q * q + p[2] * p[2] <= r_ * r_ * (1.0 + 2 * kTol);
+}
+MassProperties TorusShape::mass_properties() const {
+  MassProperties mp;
+  mp.volume = volume();
+  const double izz = mp.volume * (R_ * R_ + 0.75 * r_ * r_);
+  const double ixx = mp.volume * (0.5 * R_ * R_ + 0.625 * r_ * r_);
+  mp.inertia.diagonal() << ixx, ixx, izz;
+  return mp;
+}
+
+}  // namespace magbake::geometry

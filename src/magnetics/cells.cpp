@@ -1,0 +1,292 @@
+// Cell decomposition (paper §4.2) and the per-body hierarchy.
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#include "induction_model.h"
+#include "model.h"
+#include "parallel.h"
+
+namespace magbake::magnetics {
+namespace {
+
+// Cells of one part before they are merged into the model (part frame).
+struct PartCells {
+  std::vector<Vec3> center;    // lattice site (cuboid centre), part frame, m
+  std::vector<Vec3> centroid;  // centroid of the material inside the cell, part frame, m
+  std::vector<double> volume;  // m³ (cuboid volume x inside fraction)
+  std::vector<std::uint8_t> full;
+  Vec3 half = Vec3::Zero();
+};
+
+// Decomposes one solid into grid cells of edge <= cell_size. Boundary cells keep the inside
+// fraction of their volume and the centroid of that inside part (both from sub-samples); the
+// cuboid of every cell stays on the lattice, so neighbouring cuboids never overlap.
+PartCells decompose(const Solid& solid, const BuildSettings& s, std::int64_t budget) {
+  const Box3 box = solid.bounds();
+  const Vec3 size = box.sizes();
+  Eigen::Vector3i n;
+  for (int a = 0; a < 3; ++a) {
+    n[a] = std::max(1, static_cast<int>(std::ceil(size[a] / s.cell_size - 1e-9)));
+  }
+  const std::int64_t total = std::int64_t(n[0]) * n[1] * n[2];
+  if (total > budget) {
+    throw std::runtime_error("magnetics: a part needs " + std::to_string(total) +
+                             " grid cells, more than the limit of " + std::to_string(budget) +
+                             "; raise magnetics.cell_size");
+  }
+  const Vec3 e = size.cwiseQuotient(n.cast<double>());
+  const double cell_volume = e.prod();
+  const Vec3 lo = box.min();
+
+  std::vector<double> frac(total, 0.0);
+  std::vector<Vec3> cen(total, Vec3::Zero());
+  std::vector<std::uint8_t> full(total, 0);
+  const int ss = std::max(1, s.subsamples);
+
+  auto grid_point = [&](int i, int j, int k) {  // exact lattice corner
+    return Vec3(lo[0] + i * e[0], lo[1] + j * e[1], lo[2] + k * e[2]);
+  };
+  auto classify = [&](bool force_subsample) {
+    parallel_for_each(n[2], 1, [&](int k) {
+      for (int j = 0; j < n[1]; ++j) {
+        for (int i = 0; i < n[0]; ++i) {
+          const std::int64_t id = (std::int64_t(k) * n[1] + j) * n[0] + i;
+          const Vec3 c = grid_point(i, j, k) + 0.5 * e;
+          if (solid.is_box()) {
+            frac[id] = 1.0, cen[id] = c, full[id] = 1;
+            continue;
+          }
+          int inside = solid.contains(c) ? 1 : 0;
+          for (int q = 0; q < 8; ++q) {
+            inside += solid.contains(grid_point(i + (q & 1), j + ((q >> 1) & 1), k + ((q >> 2) & 1)));
+          }
+          if (inside == 9) {
+            frac[id] = 1.0, cen[id] = c, full[id] = 1;
+            continue;
+          }
+          if (inside == 0 && !force_subsample) continue;
+          // Boundary cell: inside fraction and centroid from ss³ sub-samples.
+          int count = 0;
+          Vec3 sum = Vec3::Zero();
+          for (int c2 = 0; c2 < ss; ++c2) {
+            for (int b2 = 0; b2 < ss; ++b2) {
+              for (int a2 = 0; a2 < ss; ++a2) {
+                const Vec3 p = grid_point(i, j, k) +
+                               Vec3((a2 + 0.5) / ss * e[0], (b2 + 0.5) / ss * e[1], (c2 + 0.5) / ss * e[2]);
+                if (solid.contains(p)) ++count, sum += p;
+              }
+            }
+          }
+          if (count > 0) {
+            frac[id] = double(count) / (ss * ss * ss);
+            cen[id] = sum / count;
+          }
+        }
+      }
+    });
+  };
+  classify(false);
+  const double grid_volume = cell_volume * std::accumulate(frac.begin(), frac.end(), 0.0);
+  if (grid_volume < 0.5 * solid.volume()) {
+    // Features thinner than a cell slipped between the corner samples: sample every cell.
+    classify(true);
+  }
+
+  PartCells out;
+  out.half = 0.5 * e;
+  for (std::int64_t id = 0; id < total; ++id) {
+    if (frac[id] <= 0.0) continue;
+    const int i = static_cast<int>(id % n[0]), j = static_cast<int>((id / n[0]) % n[1]),
+              k = static_cast<int>(id / (std::int64_t(n[0]) * n[1]));
+    out.center.push_back(grid_point(i, j, k) + 0.5 * e);
+    out.centroid.push_back(cen[id]);
+    out.volume.push_back(frac[id] * cell_volume);
+    out.full.push_back(full[id]);
+  }
+  return out;
+}
+
+// One body's cells in body frame, before hierarchy ordering.
+struct BodyCells {
+  std::vector<Vec3> pos, center, mom, half;
+  std::vector<double> vol, chi, reach, clamp;
+  std::vector<int> part;
+  std::vector<std::uint8_t> full;
+};
+
+// Recursive bisection of cells [begin, end) of `perm` along the longest axis (paper §4.2).
+struct TreeBuilder {
+  const BodyCells& bc;
+  int leaf_size;
+  std::vector<int>& perm;
+  Model& m;
+  int body;
+
+  int new_node() {
+    m.node_begin.push_back(0);
+    m.node_end.push_back(0);
+    m.node_child.push_back(-1);
+    m.node_body.push_back(body);
+    m.node_center.push_back(Vec3::Zero());
+    m.node_radius.push_back(0);
+    m.node_reach.push_back(0);
+    m.node_moment.push_back(Vec3::Zero());
+    m.node_induced.push_back(0);
+    return m.node_count() - 1;
+  }
+
+  void build(int node, int begin, int end) {
+    m.node_begin[node] = begin;
+    m.node_end[node] = end;
+    // Node aggregates: volume centroid, summed permanent moment, bounding radius.
+    double v = 0;
+    Vec3 c = Vec3::Zero(), mom = Vec3::Zero();
+    double rmax = 0;
+    bool induced = false;
+    Box3 bb;
+    for (int q = begin; q < end; ++q) {
+      const int id = perm[q];
+      v += bc.vol[id];
+      c += bc.vol[id] * bc.pos[id];
+      mom += bc.mom[id];
+      rmax = std::max(rmax, bc.reach[id]);
+      induced = induced || bc.chi[id] != 0.0;
+      bb.extend(bc.pos[id]);
+    }
+    c /= v;
+    double radius = 0;
+    for (int q = begin; q < end; ++q) {
+      const int id = perm[q];
+      radius = std::max({radius, (bc.pos[id] - c).norm() + bc.reach[id], (bc.center[id] - c).norm() + bc.reach[id]});
+    }
+    m.node_center[node] = c;
+    m.node_radius[node] = radius;
+    m.node_reach[node] = rmax;
+    m.node_moment[node] = mom;
+    m.node_induced[node] = induced;
+    if (end - begin <= leaf_size) return;
+
+    // Split at the middle of the longest axis; fall back to the median if one side is empty.
+    int axis;
+    bb.sizes().maxCoeff(&axis);
+    const double mid = bb.center()[axis];
+    auto first = perm.begin() + begin, last = perm.begin() + end;
+    auto split = std::stable_partition(first, last, [&](int id) { return bc.pos[id][axis] < mid; });
+    if (split == first || split == last) {
+      split = first + (end - begin) / 2;
+      std::nth_element(first, split, last, [&](int a, int b) {
+        return bc.pos[a][axis] < bc.pos[b][axis] || (bc.pos[a][axis] == bc.pos[b][axis] && a < b);
+      });
+    }
+    const int cut = static_cast<int>(split - perm.begin());
+    const int left = new_node();
+    new_node();
+    m.node_child[node] = left;
+    build(left, begin, cut);
+    build(left + 1, cut, end);
+  }
+};
+
+}  // namespace
+
+Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& settings) {
+  if (!(settings.cell_size > 0.0)) throw std::runtime_error("magnetics: cell_size must be positive");
+  Model m;
+  m.body_count = static_cast<int>(bodies.size());
+  m.body_cell_begin.assign(bodies.size() + 1, 0);
+  m.body_root.assign(bodies.size(), -1);
+  m.body_permanent.assign(bodies.size(), 0);
+  m.body_induced.assign(bodies.size(), 0);
+  std::vector<const Solid*> part_solid;
+
+  std::int64_t budget = settings.max_cells;
+  for (int b = 0; b < m.body_count; ++b) {
+    // Cells of all magnetic parts of this body, body frame, in part order.
+    BodyCells bc;
+    for (const PartSpec& ps : bodies[b].parts) {
+      if (ps.material.kind == MaterialKind::kNone) continue;
+      assert(ps.solid != nullptr);
+      const int pid = static_cast<int>(m.part_body.size());
+      const Mat3 R = ps.part_to_body.rotation.toRotationMatrix();
+      const Vec3 M = R * ps.material.magnetization();
+      const double chi = ps.material.induced() ? ps.material.susceptibility() : 0.0;
+      PartCells pc = decompose(*ps.solid, settings, budget);
+      if (pc.centroid.empty()) {
+        throw std::runtime_error("magnetics: body " + std::to_string(b) +
+                                 " has a part with no cell inside it; lower magnetics.cell_size");
+      }
+      budget -= static_cast<std::int64_t>(pc.centroid.size());
+      PartReport rep;
+      rep.body = b;
+      rep.cells = static_cast<int>(pc.centroid.size());
+      rep.grid_volume = std::accumulate(pc.volume.begin(), pc.volume.end(), 0.0);
+      rep.true_volume = ps.solid->volume();
+      rep.rescale = rep.true_volume / rep.grid_volume;
+      for (std::size_t q = 0; q < pc.centroid.size(); ++q) {
+        const double v = pc.volume[q] * rep.rescale;
+        bc.pos.push_back(ps.part_to_body.apply(pc.centroid[q]));
+        bc.center.push_back(ps.part_to_body.apply(pc.center[q]));
+        bc.vol.push_back(v);
+        bc.mom.push_back(M * v);
+        bc.chi.push_back(chi);
+        bc.half.push_back(pc.half);
+        bc.reach.push_back(pc.half.norm());
+        bc.clamp.push_back(pc.half.minCoeff());
+        bc.part.push_back(pid);
+        bc.full.push_back(pc.full[q]);
+        rep.full_cells += pc.full[q];
+      }
+      m.part_body.push_back(b);
+      m.part_pose.push_back(ps.part_to_body);
+      m.part_rotation.push_back(R);
+      m.part_magnetization.push_back(M);
+      m.part_chi.push_back(chi);
+      m.part_half.push_back(pc.half);
+      m.part_consistent.push_back(0);
+      m.part_report.push_back(rep);
+      part_solid.push_back(ps.solid);
+      if (ps.material.kind == MaterialKind::kPermanent) m.body_permanent[b] = 1;
+      if (chi != 0.0) m.body_induced[b] = 1;
+    }
+    const int begin = m.cell_count();
+    m.body_cell_begin[b] = begin;
+    if (!bc.pos.empty()) {
+      std::vector<int> perm(bc.pos.size());
+      std::iota(perm.begin(), perm.end(), 0);
+      TreeBuilder tb{bc, std::max(1, settings.leaf_size), perm, m, b};
+      const int root = tb.new_node();
+      m.body_root[b] = root;
+      tb.build(root, 0, static_cast<int>(bc.pos.size()));
+      // Node ranges are local to the body: shift them to global cell indices.
+      for (int n = root; n < m.node_count(); ++n) {
+        m.node_begin[n] += begin;
+        m.node_end[n] += begin;
+      }
+      for (int id : perm) {
+        m.cell_position.push_back(bc.pos[id]);
+        m.cell_center.push_back(bc.center[id]);
+        m.cell_moment.push_back(bc.mom[id]);
+        m.cell_volume.push_back(bc.vol[id]);
+        m.cell_chi.push_back(bc.chi[id]);
+        m.cell_half.push_back(bc.half[id]);
+        m.cell_reach.push_back(bc.reach[id]);
+        m.cell_clamp.push_back(bc.clamp[id]);
+        m.cell_part.push_back(bc.part[id]);
+        m.cell_body.push_back(b);
+        m.cell_full.push_back(bc.full[id]);
+      }
+    }
+    m.body_cell_begin[b + 1] = m.cell_count();
+  }
+  for (int c = 0; c < m.cell_count(); ++c) {
+    if (m.cell_chi[c] != 0.0) m.induced_cells.push_back(c);
+  }
+  build_induction_model(m, part_solid, settings);
+  return m;
+}
+
+}  // namespace magbake::magnetics

@@ -1,0 +1,250 @@
+#include "cuboid.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cassert>
+#include <cmath>
+
+namespace magbake::magnetics {
+namespace {
+
+// ln(a + R) without cancellation when a ~ -R (R = sqrt(a² + q2), q2 = the other two squares).
+inline double log_plus_r(double a, double R, double q2) {
+  if (a >= 0.0) return std::log(a + R);
+  // a + R = q2 / (R - a); on the extension of an edge q2 -> 0 and the two corners that share
+  // the line cancel, so a tiny floor keeps both terms finite and equal.
+  return std::log(std::max(q2, 1e-300 * R * R + 1e-300) / (R - a));
+}
+
+// H (in units of sigma / 4pi) at p of the rectangle u in [u0,u1], v in [v0,v1] in the plane
+// w = w0, charge density 1; p in (u, v, w) coordinates; result in (u, v, w) components.
+Vec3 rectangle_h(double pu, double pv, double pw, double u0, double u1, double v0, double v1, double w0) {
+  Vec3 h = Vec3::Zero();
+  const double Z = pw - w0;
+  const double Z2 = Z * Z;
+  const double us[2] = {pu - u0, pu - u1};
+  const double vs[2] = {pv - v0, pv - v1};
+  for (int a = 0; a < 2; ++a) {
+    for (int b = 0; b < 2; ++b) {
+      const double s = (a == b) ? 1.0 : -1.0;
+      const double X = us[a], Y = vs[b];
+      const double R = std::sqrt(X * X + Y * Y + Z2);
+      h[0] -= s * log_plus_r(Y, R, X * X + Z2);
+      h[1] -= s * log_plus_r(X, R, Y * Y + Z2);
+      // atan(XY / (Z R)), odd in Z; Z = 0 gives the in-plane limit sign(XY) pi/2 (from Z > 0).
+      h[2] += s * (Z >= 0.0 ? std::atan2(X * Y, Z * R) : std::atan2(-X * Y, -Z * R));
+    }
+  }
+  return h;
+}
+
+constexpr double kInv4Pi = 1.0 / (4.0 * std::numbers::pi);
+
+// Gauss–Legendre nodes and weights on [0, 1] for orders 1..8, optionally with the smoothstep
+// substitution t -> t²(3 - 2t), which clusters nodes at both ends (log-singular integrands).
+struct Rule {
+  int n = 0;
+  std::array<double, 8> x{}, w{};
+};
+
+Rule gauss_rule(int n, bool cluster) {
+  static const double kX[8][8] = {
+      {0.0},
+      {-0.5773502691896257, 0.5773502691896257},
+      {-0.7745966692414834, 0.0, 0.7745966692414834},
+      {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526},
+      {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640},
+      {-0.9324695142031521, -0.6612093864662645, -0.2386191860831969, 0.2386191860831969,
+       0.6612093864662645, 0.9324695142031521},
+      {-0.9491079123427585, -0.7415311855993945, -0.4058451513773972, 0.0, 0.4058451513773972,
+       0.7415311855993945, 0.9491079123427585},
+      {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290, -0.1834346424956498,
+       0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363}};
+  static const double kW[8][8] = {
+      {2.0},
+      {1.0, 1.0},
+      {0.5555555555555556, 0.8888888888888888, 0.5555555555555556},
+      {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538},
+      {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665, 0.2369268850561891},
+      {0.1713244923791704, 0.3607615730481386, 0.4679139345726910, 0.4679139345726910,
+       0.3607615730481386, 0.1713244923791704},
+      {0.1294849661688697, 0.2797053914892766, 0.3818300505051189, 0.4179591836734694,
+       0.3818300505051189, 0.2797053914892766, 0.1294849661688697},
+      {0.1012285362903763, 0.2223810344533745, 0.3137066458778873, 0.3626837833783620,
+       0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763}};
+  Rule r;
+  r.n = std::clamp(n, 1, 8);
+  for (int j = 0; j < r.n; ++j) {
+    const double t = 0.5 * (kX[r.n - 1][j] + 1.0);
+    const double w = 0.5 * kW[r.n - 1][j];
+    if (cluster) {
+      r.x[j] = t * t * (3.0 - 2.0 * t);
+      r.w[j] = w * 6.0 * t * (1.0 - t);
+    } else {
+      r.x[j] = t;
+      r.w[j] = w;
+    }
+  }
+  return r;
+}
+
+// Index of the axis of i's frame that unit vector e is parallel to (-1 if none).
+int parallel_axis(const Vec3& e) {
+  for (int a = 0; a < 3; ++a) {
+    if (std::abs(e[a]) > 1.0 - 1e-12) return a;
+  }
+  return -1;
+}
+
+}  // namespace
+
+Vec3 cuboid_h_field(const Vec3& half, const Vec3& M, const Vec3& x) {
+  Vec3 H = Vec3::Zero();
+  for (int w = 0; w < 3; ++w) {
+    if (M[w] == 0.0) continue;
+    const int u = (w + 1) % 3, v = (w + 2) % 3;
+    for (int side = -1; side <= 1; side += 2) {
+      const Vec3 h = rectangle_h(x[u], x[v], x[w], -half[u], half[u], -half[v], half[v], side * half[w]);
+      const double sigma = side * M[w];
+      H[u] += sigma * h[0];
+      H[v] += sigma * h[1];
+      H[w] += sigma * h[2];
+    }
+  }
+  return kInv4Pi * H;
+}
+
+Vec3 cuboid_b_field(const Vec3& half, const Vec3& M, const Vec3& x) {
+  Vec3 B = kMu0 * cuboid_h_field(half, M, x);
+  if (std::abs(x[0]) < half[0] && std::abs(x[1]) < half[1] && std::abs(x[2]) < half[2]) B += kMu0 * M;
+  return B;
+}
+
+void cuboid_pair(const Cuboid& k, const Cuboid& i, int order, Vec3& force, Vec3& torque) {
+  // Work in i's frame: k's centre, axes and magnetization there.
+  const Mat3 Rit = i.rotation.transpose();
+  const Vec3 ck = Rit * (k.center - i.center);
+  const Mat3 Rk = Rit * k.rotation;          // k frame -> i frame
+  const Vec3 Mi = Rit * i.magnetization;     // i frame
+  const Vec3 Mk_local = k.rotation.transpose() * k.magnetization;  // k frame: face charges
+  const double scale = std::max({k.half.maxCoeff(), i.half.maxCoeff()});
+
+  Vec3 F = Vec3::Zero(), T = Vec3::Zero();
+  for (int w = 0; w < 3; ++w) {
+    if (Mk_local[w] == 0.0) continue;
+    const int u = (w + 1) % 3, v = (w + 2) % 3;
+    const Vec3 eu = Rk.col(u), ev = Rk.col(v), ew = Rk.col(w);
+    const int au = parallel_axis(eu), av = parallel_axis(ev), aw = parallel_axis(ew);
+    const bool aligned = au >= 0 && av >= 0 && aw >= 0;
+    for (int side = -1; side <= 1; side += 2) {
+      const double sigma = side * Mk_local[w];
+      // Face centre, nudged into k so that points on a shared plane see i's outside field.
+      const Vec3 fc = ck + (side * k.half[w] * (1.0 - 1e-10)) * ew;
+      // Split the face where i's face edges cross it (aligned cuboids only), so each piece is
+      // either over or beside i's faces and the integrand has no jump inside a piece.
+      std::array<double, 4> su{-k.half[u], k.half[u]}, sv{-k.half[v], k.half[v]};
+      int nu = 2, nv = 2;
+      bool touching = false;
+      if (aligned) {
+        auto add_splits = [&](int axis, const Vec3& e, double h, std::array<double, 4>& s, int& n) {
+          for (int sg = -1; sg <= 1; sg += 2) {
+            const double t = (sg * i.half[axis] - fc[axis]) / e[axis];
+            if (t > -h + 1e-12 * scale && t < h - 1e-12 * scale) s[n++] = t;
+          }
+          std::sort(s.begin(), s.begin() + n);
+        };
+        add_splits(au, eu, k.half[u], su, nu);
+        add_splits(av, ev, k.half[v], sv, nv);
+        touching = std::abs(std::abs(fc[aw]) - i.half[aw]) < 1e-6 * scale;
+      } else {
+        // Rotated: only the distance between the face and i tells whether to cluster nodes.
+        touching = true;
+      }
+      const Rule rule = gauss_rule(order, touching);
+      for (int a = 0; a + 1 < nu; ++a) {
+        for (int b = 0; b + 1 < nv; ++b) {
+          const double u0 = su[a], du = su[a + 1] - su[a];
+          const double v0 = sv[b], dv = sv[b + 1] - sv[b];
+          for (int p = 0; p < rule.n; ++p) {
+            for (int q = 0; q < rule.n; ++q) {
+              const double s = u0 + du * rule.x[p], t = v0 + dv * rule.x[q];
+              const Vec3 x = fc + s * eu + t * ev;
+              const Vec3 B = kMu0 * cuboid_h_field(i.half, Mi, x);
+              const Vec3 dF = (sigma * rule.w[p] * rule.w[q] * du * dv) * B;
+              F += dF;
+              T += (x - ck).cross(dF);
+            }
+          }
+        }
+      }
+    }
+  }
+  force = i.rotation * F;
+  torque = i.rotation * T;
+}
+
+Mat3 cuboid_mean_field_tensor(const Cuboid& target, const Cuboid& source, int order) {
+  // Source frame: target centre and axes there.
+  const Mat3 Rst = source.rotation.transpose();
+  const Vec3 ct = Rst * (target.center - source.center);
+  const Mat3 Rt = Rst * target.rotation;
+  const Vec3& hs = source.half;
+  const Vec3& ht = target.half;
+  int axis_of[3] = {-1, -1, -1};
+  bool aligned = true;
+  for (int a = 0; a < 3; ++a) {
+    axis_of[a] = parallel_axis(Rt.col(a));
+    aligned = aligned && axis_of[a] >= 0;
+  }
+  // Interval splits along each target axis at the source's face planes.
+  std::array<std::array<double, 4>, 3> cut;
+  int ncut[3];
+  for (int a = 0; a < 3; ++a) {
+    cut[a] = {-ht[a], ht[a], 0, 0};
+    ncut[a] = 2;
+    if (!aligned) continue;
+    const int sa = axis_of[a];
+    const double dir = Rt(sa, a);
+    for (int sg = -1; sg <= 1; sg += 2) {
+      const double t = (sg * hs[sa] - ct[sa]) / dir;
+      if (t > -ht[a] * (1 - 1e-12) && t < ht[a] * (1 - 1e-12)) cut[a][ncut[a]++] = t;
+    }
+    std::sort(cut[a].begin(), cut[a].begin() + ncut[a]);
+  }
+  const Rule rule = gauss_rule(order, true);
+  Mat3 N = Mat3::Zero();
+  for (int i = 0; i + 1 < ncut[0]; ++i) {
+    for (int j = 0; j + 1 < ncut[1]; ++j) {
+      for (int k = 0; k + 1 < ncut[2]; ++k) {
+        const double d0 = cut[0][i + 1] - cut[0][i], d1 = cut[1][j + 1] - cut[1][j], d2 = cut[2][k + 1] - cut[2][k];
+        for (int p = 0; p < rule.n; ++p) {
+          for (int q = 0; q < rule.n; ++q) {
+            for (int r = 0; r < rule.n; ++r) {
+              const Vec3 local(cut[0][i] + d0 * rule.x[p], cut[1][j] + d1 * rule.x[q], cut[2][k] + d2 * rule.x[r]);
+              const Vec3 x = ct + Rt * local;
+              const double w = rule.w[p] * rule.w[q] * rule.w[r] * d0 * d1 * d2;
+              for (int c = 0; c < 3; ++c) N.col(c) += w * cuboid_h_field(hs, Vec3::Unit(c), x);
+            }
+          }
+        }
+      }
+    }
+  }
+  N /= 8.0 * ht.prod();
+  return source.rotation * N * Rst;
+}
+
+const Mat3& LatticeTensors::get(const Vec3& half, const Eigen::Vector3i& offset) {
+  const std::array<std::int64_t, 6> key{std::bit_cast<std::int64_t>(half[0]), std::bit_cast<std::int64_t>(half[1]),
+                                        std::bit_cast<std::int64_t>(half[2]), offset[0], offset[1], offset[2]};
+  auto it = cache_.find(key);
+  if (it == cache_.end()) {
+    const Cuboid t{offset.cast<double>().cwiseProduct(2.0 * half), Mat3::Identity(), half, Vec3::Zero()};
+    const Cuboid s{Vec3::Zero(), Mat3::Identity(), half, Vec3::Zero()};
+    it = cache_.emplace(key, cuboid_mean_field_tensor(t, s, 6)).first;
+  }
+  return it->second;
+}
+
+}  // namespace magbake::magnetics

@@ -1,0 +1,66 @@
+// Closed-form point-dipole kernels (physics-notes §2), in double precision.
+// Every function is exact for point dipoles; the adaptive traversal calls them for aggregated
+// (node) dipoles, the block kernels evaluate the same formulas for many cell pairs at once.
+#pragma once
+
+#include "types.h"
+
+namespace magbake::magnetics {
+
+/// Field B (tesla) at offset r = x - x_i (m) from a point dipole of moment m_i (A·m²).
+/// r must be non-zero.
+inline Vec3 dipole_field(const Vec3& r, const Vec3& m_i) {
+  const double d2 = r.squaredNorm();
+  const double inv = 1.0 / std::sqrt(d2);
+  const double inv5 = inv * inv * inv * inv * inv;
+  return kMu0Over4Pi * inv5 * (3.0 * m_i.dot(r) * r - d2 * m_i);
+}
+
+/// Field B (tesla) and its gradient G(a,b) = dB_a/dx_b (T/m) at offset r from a point dipole.
+inline void dipole_field_gradient(const Vec3& r, const Vec3& m, Vec3& B, Mat3& G) {
+  const double d2 = r.squaredNorm();
+  const double inv = 1.0 / std::sqrt(d2);
+  const double inv2 = inv * inv;
+  const double inv5 = inv2 * inv2 * inv;
+  const double mr = m.dot(r);
+  B = kMu0Over4Pi * inv5 * (3.0 * mr * r - d2 * m);
+  // d/dx_b of (3 (m.r) r_a - d2 m_a) / d^5
+  //  = [3 m_b r_a + 3 (m.r) delta_ab - 2 r_b m_a] / d^5 - 5 r_b (3 (m.r) r_a - d2 m_a) / d^7
+  const Vec3 q = 3.0 * mr * r - d2 * m;
+  G = kMu0Over4Pi * inv5 *
+      (3.0 * r * m.transpose() + 3.0 * mr * Mat3::Identity() - 2.0 * m * r.transpose() -
+       5.0 * inv2 * q * r.transpose());
+}
+
+/// Interaction of two point dipoles: the force and torque on dipole k (moment m_k at x_k) due to
+/// dipole i (moment m_i at x_i), r = x_k - x_i. The torque is about x_k. Energy U = -m_k·B_i(x_k).
+/// Dipole i feels F_i = -F_k and T_i = -(T_k + r × F_k) (momentum conservation, physics-notes §2).
+struct DipolePair {
+  Vec3 force;      ///< N, on k
+  Vec3 torque;     ///< N·m, on k about x_k
+  double energy;   ///< J, interaction energy of the pair
+};
+
+/// Evaluates the pair with the distance clamped to at least d_min (m, physics-notes §6);
+/// the direction of r is kept.
+inline DipolePair dipole_pair(const Vec3& r_in, const Vec3& m_k, const Vec3& m_i, double d_min = 0.0) {
+  Vec3 r = r_in;
+  double d2 = r.squaredNorm();
+  if (d2 < d_min * d_min) {
+    r *= d_min / std::sqrt(d2);
+    d2 = d_min * d_min;
+  }
+  const double inv = 1.0 / std::sqrt(d2);
+  const double inv2 = inv * inv;
+  const double inv5 = inv2 * inv2 * inv;
+  const double a = m_k.dot(r), b = m_i.dot(r), c = m_k.dot(m_i);
+  const double s = c - 5.0 * a * b * inv2;
+  DipolePair p;
+  p.force = (3.0 * kMu0Over4Pi * inv5) * (a * m_i + b * m_k + s * r);
+  const Vec3 B = (kMu0Over4Pi * inv5) * (3.0 * b * r - d2 * m_i);
+  p.torque = m_k.cross(B);
+  p.energy = -m_k.dot(B);
+  return p;
+}
+
+}  // namespace magbake::magnetics

@@ -1,0 +1,24 @@
+// Magnetic flux density B at arbitrary points from all cells, by a tree code over the body
+// hierarchies (Barnes–Hut with grouped targets and the same opening angle theta as forces).
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "state.h"
+
+namespace magbake::magnetics {
+
+/// Options of one field evaluation.
+struct FieldOptions {
+  double theta = 0.5;       ///< opening angle (0 = every cell)
+  double near_field = 0.0;  ///< exact cuboid field within this many cell sizes of full cells (0 = off)
+};
+
+/// B (tesla, world) of `sources` at every target, in target order (B has targets.position.size()
+/// entries). Cell world positions come from the state (body poses set, offsets updated).
+/// Adds nothing for the applied field. Returns the number of source–target evaluations.
+std::int64_t field_at_targets(const Model& model, const State& s, const Sources& sources, const Targets& targets,
+                              const FieldOptions& options, std::span<Vec3> B);
+
+}  // namespace magbake::magnetics

@@ -1,0 +1,124 @@
+#include "induction_model.h"
+
+#include <cmath>
+
+#include "cuboid.h"
+#include "parallel.h"
+
+namespace magbake::magnetics {
+
+Mat3 dipole_tensor(const Vec3& r) {
+  const double d2 = r.squaredNorm();
+  const double inv = 1.0 / std::sqrt(d2);
+  const double inv5 = inv * inv * inv * inv * inv;
+  return kMu0Over4Pi * inv5 * (3.0 * r * r.transpose() - d2 * Mat3::Identity());
+}
+
+namespace {
+
+// Mean-field tensor (body frame) of cell j's cuboid over cell i's cuboid, per unit M of j.
+Mat3 mean_tensor(const Model& m, LatticeTensors* lattice, int i, int j) {
+  const int pi = m.cell_part[i], pj = m.cell_part[j];
+  if (pi == pj && lattice) {
+    const Mat3& R = m.part_rotation[pi];
+    const Vec3 h = m.part_half[pi];
+    const Vec3 o = (R.transpose() * (m.cell_center[i] - m.cell_center[j])).cwiseQuotient(2.0 * h);
+    const Eigen::Vector3i off(int(std::lround(o[0])), int(std::lround(o[1])), int(std::lround(o[2])));
+    return R * lattice->get(h, off) * R.transpose();
+  }
+  return cuboid_mean_field_tensor(Cuboid{m.cell_center[i], m.part_rotation[pi], m.cell_half[i], Vec3::Zero()},
+                                  Cuboid{m.cell_center[j], m.part_rotation[pj], m.cell_half[j], Vec3::Zero()}, 4);
+}
+
+bool is_source(const Model& m, int c) { return m.cell_chi[c] != 0.0 || m.cell_moment[c].squaredNorm() > 0.0; }
+
+}  // namespace
+
+void build_induction_model(Model& m, const std::vector<const Solid*>& part_solid, const BuildSettings& settings) {
+  const int nind = static_cast<int>(m.induced_cells.size());
+  m.induction_near = settings.induction_near;
+  m.cell_polarizability.assign(m.cell_count(), Mat3::Zero());
+  m.near_begin.assign(nind + 1, 0);
+  m.near_cell.clear();
+  m.near_tensor.clear();
+  if (nind == 0) return;
+  LatticeTensors lattice;
+
+  // 1. Near rows inside each body: (exact mean field of the source cuboid - point dipole).
+  std::vector<std::vector<int>> cand(nind);
+  parallel_for_each(nind, 16, [&](int r) {
+    const int i = m.induced_cells[r];
+    const int b = m.cell_body[i];
+    const double hi = m.cell_half[i].maxCoeff();
+    for (int j = m.body_cell_begin[b]; j < m.body_cell_begin[b + 1]; ++j) {
+      if (j == i || !is_source(m, j)) continue;
+      const double lim = settings.induction_near * (hi + m.cell_half[j].maxCoeff());
+      if ((m.cell_center[i] - m.cell_center[j]).squaredNorm() < lim * lim) cand[r].push_back(j);
+    }
+  });
+  for (int r = 0; r < nind; ++r) {
+    m.near_begin[r + 1] = m.near_begin[r] + static_cast<int>(cand[r].size());
+    m.near_cell.insert(m.near_cell.end(), cand[r].begin(), cand[r].end());
+  }
+  m.near_tensor.resize(m.near_cell.size());
+  // Same-lattice entries from the shared table (serial), the others by quadrature (parallel).
+  for (int r = 0; r < nind; ++r) {
+    const int i = m.induced_cells[r];
+    for (int e = m.near_begin[r]; e < m.near_begin[r + 1]; ++e) {
+      const int j = m.near_cell[e];
+      if (m.cell_part[i] != m.cell_part[j]) continue;
+      m.near_tensor[e] = kMu0 * mean_tensor(m, &lattice, i, j) / (8.0 * m.cell_half[j].prod()) -
+                         dipole_tensor(m.cell_position[i] - m.cell_position[j]);
+    }
+  }
+  parallel_for_each(nind, 4, [&](int r) {
+    const int i = m.induced_cells[r];
+    for (int e = m.near_begin[r]; e < m.near_begin[r + 1]; ++e) {
+      const int j = m.near_cell[e];
+      if (m.cell_part[i] == m.cell_part[j]) continue;
+      m.near_tensor[e] = kMu0 * mean_tensor(m, nullptr, i, j) / (8.0 * m.cell_half[j].prod()) -
+                         dipole_tensor(m.cell_position[i] - m.cell_position[j]);
+    }
+  });
+
+  // 2. Self-field and polarizability of every induced cell, part by part.
+  for (std::size_t p = 0; p < m.part_body.size(); ++p) {
+    if (m.part_chi[p] == 0.0) continue;
+    const double chi = m.part_chi[p];
+    const Mat3& R = m.part_rotation[p];
+    const Pose& pose = m.part_pose[p];
+    std::vector<int> rank;  // induced ranks of this part's cells
+    for (int r = 0; r < nind; ++r) {
+      if (m.cell_part[m.induced_cells[r]] == static_cast<int>(p)) rank.push_back(r);
+    }
+    Mat3 probe;
+    const bool consistent = part_solid[p]->demag_tensor(Vec3::Zero(), probe);
+    m.part_consistent[p] = consistent;
+    const Mat3 own = -R * lattice.get(m.part_half[p], Eigen::Vector3i::Zero()) * R.transpose();
+    parallel_for_each(static_cast<int>(rank.size()), 8, [&](int q) {
+      const int r = rank[q];
+      const int i = m.induced_cells[r];
+      Mat3 N = own;
+      if (consistent) {
+        // Exact field of the uniformly magnetized part at the cell ...
+        Mat3 D;
+        part_solid[p]->demag_tensor(pose.rotation.conjugate() * (m.cell_position[i] - pose.position), D);
+        // ... minus what the discrete operator gives there for the same uniform magnetization.
+        Mat3 S = Mat3::Zero();
+        for (int rj : rank) {
+          const int j = m.induced_cells[rj];
+          if (j != i) S += m.cell_volume[j] * dipole_tensor(m.cell_position[i] - m.cell_position[j]);
+        }
+        for (int e = m.near_begin[r]; e < m.near_begin[r + 1]; ++e) {
+          const int j = m.near_cell[e];
+          if (m.cell_part[j] == static_cast<int>(p)) S += m.cell_volume[j] * m.near_tensor[e];
+        }
+        N = R * D * R.transpose() + S / kMu0;
+      }
+      // M = chi (H_loc - N M)  =>  m = v (1 + chi N)^-1 chi H_loc.
+      m.cell_polarizability[i] = m.cell_volume[i] * chi * (Mat3::Identity() + chi * N).inverse();
+    });
+  }
+}
+
+}  // namespace magbake::magnetics

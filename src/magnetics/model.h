@@ -1,0 +1,118 @@
+// The immutable description of every magnetic body: dipole cells and their hierarchies.
+// Built once per scene (cells.cpp, hierarchy.cpp); per-step data lives in State (state.h).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "material.h"
+#include "solid.h"
+#include "types.h"
+
+namespace magbake::magnetics {
+
+/// One part of a body: a solid, where it sits in the body frame, and its material.
+struct PartSpec {
+  const Solid* solid = nullptr;  ///< not owned; only used during build_model()
+  Pose part_to_body;             ///< part frame -> body frame
+  Material material;
+};
+
+/// One rigid body. Its frame's origin is the point torques are reported about (the caller
+/// puts it at the centre of mass). Bodies without magnetic parts get no cells and cost nothing.
+struct BodySpec {
+  std::vector<PartSpec> parts;
+};
+
+/// Knobs of the cell decomposition.
+struct BuildSettings {
+  double cell_size = 0.002;   ///< finest cell edge, m (upper bound; each part's grid fits its bounds)
+  int leaf_size = 32;         ///< max cells in a hierarchy leaf (block kernels work on leaf pairs)
+  int subsamples = 4;         ///< per axis, to measure the inside fraction of boundary cells
+  std::int64_t max_cells = 4'000'000;  ///< capacity guard: building more cells is an error
+  /// Induced cells closer than this many cell sizes interact through the exact mean field of
+  /// their cuboids in the induction solve (point dipoles beyond). 0 = point dipoles only.
+  double induction_near = 2.0;
+};
+
+/// Per-part statistics of the decomposition.
+struct PartReport {
+  int body = 0;
+  int cells = 0;            ///< cells kept
+  int full_cells = 0;       ///< cells entirely inside (exact cuboids for the near field)
+  double grid_volume = 0;   ///< summed cell volume before rescaling, m³
+  double true_volume = 0;   ///< the solid's exact volume, m³
+  double rescale = 1;       ///< true_volume / grid_volume (paper §4.2)
+};
+
+/// All magnetic bodies: cells (flat arrays, hierarchy order) and per-body binary hierarchies.
+/// Shapes in comments are (count x components); "body frame" means the body's own frame.
+struct Model {
+  int body_count = 0;
+
+  // ---- bodies (body_count)
+  std::vector<int> body_cell_begin;      ///< (nbody+1) cells of body b are [begin[b], begin[b+1])
+  std::vector<int> body_root;            ///< root node of body b, -1 if the body has no cells
+  std::vector<std::uint8_t> body_permanent;  ///< body has permanently magnetized cells
+  std::vector<std::uint8_t> body_induced;    ///< body has induced (linear/superconducting) cells
+
+  // ---- parts (npart)
+  std::vector<int> part_body;            ///< owning body
+  std::vector<Pose> part_pose;           ///< part frame -> body frame
+  std::vector<Mat3> part_rotation;       ///< part frame -> body frame (cell cuboid axes)
+  std::vector<Vec3> part_magnetization;  ///< permanent M in the body frame, A/m (0 if induced)
+  std::vector<double> part_chi;          ///< susceptibility (0 for permanent and none)
+  std::vector<Vec3> part_half;           ///< half-edges of the part's cells, part frame, m
+  std::vector<std::uint8_t> part_consistent;  ///< induced part whose cells are corrected to be
+                                         ///< exact for uniform magnetization (its solid has demag_tensor)
+  std::vector<PartReport> part_report;
+
+  // ---- cells (ncell), ordered so every node's cells are contiguous
+  std::vector<Vec3> cell_position;       ///< (ncell x 3) where the moment sits (centroid of the
+                                         ///< material in the cell), body frame, m
+  std::vector<Vec3> cell_center;         ///< (ncell x 3) centre of the cell's cuboid, body frame, m
+  std::vector<Vec3> cell_moment;         ///< (ncell x 3) permanent moment, body frame, A·m²
+  std::vector<double> cell_volume;       ///< (ncell) m³ of material, after rescaling to the true volume
+  std::vector<double> cell_chi;          ///< (ncell) susceptibility of the cell's material; 0 if not induced
+  std::vector<Mat3> cell_polarizability; ///< (ncell x 3 x 3) body frame, m³: m = P B_loc / mu0, with
+                                         ///< B_loc the field of all other cells (+ near corrections)
+  std::vector<Vec3> cell_half;           ///< (ncell x 3) half-edges of the cuboid cell, part frame, m
+  std::vector<double> cell_reach;        ///< (ncell) radius of the cell's bounding sphere, m
+  std::vector<double> cell_clamp;        ///< (ncell) half of the closest approach of two cells, m
+  std::vector<int> cell_part;            ///< (ncell) part index
+  std::vector<int> cell_body;            ///< (ncell) body index
+  std::vector<std::uint8_t> cell_full;   ///< (ncell) 1 if the cuboid lies entirely inside its part
+  std::vector<int> induced_cells;        ///< indices of cells with cell_chi != 0, ascending
+
+  // ---- near-field corrections of the induction operator inside each body (rigid, so built once)
+  // Row r belongs to induced_cells[r]: B_mean - B_dipole at that cell = tensor * m(source), body frame.
+  double induction_near = 0;             ///< radius used, in cell sizes (BuildSettings::induction_near)
+  std::vector<int> near_begin;           ///< (ninduced + 1)
+  std::vector<int> near_cell;            ///< source cell of each entry (same body)
+  std::vector<Mat3> near_tensor;         ///< T/(A·m²), body frame
+
+  // ---- hierarchy nodes (nnode); children of node n are node_child[n] and node_child[n]+1
+  std::vector<int> node_begin, node_end; ///< (nnode) cell range
+  std::vector<int> node_child;           ///< (nnode) first child, -1 for a leaf
+  std::vector<int> node_body;            ///< (nnode) owning body
+  std::vector<Vec3> node_center;         ///< (nnode x 3) volume centroid of the cells, body frame, m
+  std::vector<double> node_radius;       ///< (nnode) bounding radius of the cells' cuboids, m
+  std::vector<double> node_reach;        ///< (nnode) largest cell_reach below the node, m
+  std::vector<Vec3> node_moment;         ///< (nnode x 3) summed permanent moment, body frame, A·m²
+  std::vector<std::uint8_t> node_induced;///< (nnode) node holds induced cells
+
+  int cell_count() const { return static_cast<int>(cell_position.size()); }
+  int node_count() const { return static_cast<int>(node_begin.size()); }
+  bool has_induced() const { return !induced_cells.empty(); }
+  bool empty() const { return cell_position.empty(); }
+};
+
+/// Decomposes every body into dipole cells (paper §4.2, with inside-fraction weighting of
+/// boundary cells) and builds the per-body hierarchies. A cell is a cuboid on its part's lattice
+/// carrying the moment of the material inside it (smeared uniformly over the cuboid). Throws std::runtime_error when a part
+/// is too small for the cell size or the model would exceed settings.max_cells (the message
+/// names the knob to turn).
+Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& settings);
+
+}  // namespace magbake::magnetics

@@ -1,0 +1,31 @@
+// The one thing the cell builder needs to know about a shape: where it is.
+#pragma once
+
+#include "types.h"
+
+namespace magbake::magnetics {
+
+/// A closed region of space in its own (part) frame. Implemented by src/geometry shapes;
+/// the magnetics library knows no concrete shape.
+class Solid {
+ public:
+  virtual ~Solid() = default;
+  /// Axis-aligned bounds of the region in its own frame, m.
+  virtual Box3 bounds() const = 0;
+  /// Exact volume of the region, m³ (cell moments are rescaled to it, paper §4.2).
+  virtual double volume() const = 0;
+  /// True when point p (own frame, m) lies inside the region. Must be thread-safe.
+  virtual bool contains(const Vec3& p) const = 0;
+  /// True when the region is exactly its bounding box (lets the builder skip inside tests).
+  virtual bool is_box() const { return false; }
+  /// Demagnetizing tensor D at p inside the region (own frame): when the whole region is
+  /// uniformly magnetized with M, its own field there is H = -D M. Returns false when the solid
+  /// cannot compute it (the induction solve then skips its boundary consistency correction).
+  virtual bool demag_tensor(const Vec3& p, Mat3& D) const {
+    (void)p;
+    (void)D;
+    return false;
+  }
+};
+
+}  // namespace magbake::magnetics

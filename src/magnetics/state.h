@@ -1,0 +1,75 @@
+// Everything an evaluation changes: body poses (input), induced moments (kept for warm starts)
+// and work buffers reused from step to step (no allocation once sized).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <span>
+#include <vector>
+
+#include "model.h"
+#include "settings.h"
+
+namespace magbake::magnetics {
+
+/// Cell moments acting as field sources, with their per-node sums.
+struct Sources {
+  std::vector<Vec3> cell;                 ///< (ncell x 3) world, A·m²
+  std::vector<Vec3> node;                 ///< (nnode x 3) world, A·m², sum over the node's cells
+  std::vector<std::uint8_t> node_active;  ///< (nnode) some cell below has a non-zero moment
+
+  /// Sizes the arrays and recomputes node sums and activity from `cell`.
+  void aggregate(const Model& model);
+};
+
+struct State;
+
+/// Points where B is wanted, grouped spatially so each group walks the source trees once.
+struct Targets {
+  std::vector<Vec3> position;      ///< (ntarget x 3) world, m, in group order
+  std::vector<int> cell;           ///< (ntarget) cell the target sits on (its self-field is skipped), or -1
+  std::vector<int> original;       ///< (ntarget) index in the caller's order
+  std::vector<int> group_begin;    ///< (ngroup + 1)
+  std::vector<Vec3> group_center;  ///< (ngroup x 3) world, m
+  std::vector<double> group_radius;///< (ngroup) m
+
+  /// Groups arbitrary points by recursive bisection (at most `group_size` per group).
+  static Targets from_points(std::span<const Vec3> points, int group_size = 32);
+  /// Targets at the induced cells of the model (groups = hierarchy leaves), world positions from `s`.
+  static Targets from_induced_cells(const Model& model, const State& s);
+  /// Recomputes positions and group bounds of targets made by from_induced_cells.
+  void update_induced_positions(const Model& model, const State& s);
+};
+
+/// Per-evaluation state of the magnetics. Set body_pose, then call evaluate().
+struct State {
+  std::vector<Pose> body_pose;        ///< (nbody) body frame -> world; input
+
+  std::vector<Vec3> induced_moment;   ///< (ninduced) world, A·m²; output and next warm start
+
+  // ---- derived each evaluation (world frame)
+  std::vector<Vec3> cell_offset;      ///< (ncell x 3) cell position minus body origin, m
+  std::vector<Vec3> node_offset;      ///< (nnode x 3) node centre minus body origin, m
+  Sources total;                      ///< total (permanent + induced) cell moments and node sums
+  Sources permanent;                  ///< permanent moments only (induction right-hand side)
+  Sources induced;                    ///< induced moments only (induction operator)
+  Targets induced_targets;            ///< the induced cells as field targets
+
+  /// Near-field corrections of the induction operator, rows = induced targets (target order):
+  /// B_mean(target) - B_dipole(target) = tensor * m(source cell), world frame, T/(A·m²).
+  struct NearRows {
+    std::vector<int> begin;            ///< (ntarget + 1)
+    std::vector<int> cell;             ///< source cell of each entry
+    std::vector<Mat3> tensor;          ///< correction tensor of each entry
+  } induced_near;
+  std::vector<Mat3> body_rotation;    ///< (nbody) rotation matrices
+  std::vector<Mat3> part_rotation;    ///< (npart) part frame -> world
+  // float copies for the single-precision block kernels: (ncell) each
+  std::vector<float> fx, fy, fz, fmx, fmy, fmz, fclamp;
+
+  /// Sizes every buffer for `model` (call once; evaluate() calls it when sizes differ).
+  void resize(const Model& model);
+};
+
+}  // namespace magbake::magnetics

@@ -1,0 +1,102 @@
+#include "system.h"
+
+#include <algorithm>
+
+#include "forces.h"
+#include "induction.h"
+#include "parallel.h"
+
+namespace magbake::magnetics {
+
+void State::resize(const Model& m) {
+  if (body_pose.size() != static_cast<std::size_t>(m.body_count)) body_pose.resize(m.body_count);
+  const std::size_t nc = m.cell_count(), nn = m.node_count();
+  cell_offset.resize(nc);
+  node_offset.resize(nn);
+  for (Sources* src : {&total, &permanent, &induced}) {
+    src->cell.assign(nc, Vec3::Zero());
+    src->node.assign(nn, Vec3::Zero());
+    src->node_active.assign(nn, 0);
+  }
+  body_rotation.resize(m.body_count);
+  part_rotation.resize(m.part_body.size());
+  for (auto* v : {&fx, &fy, &fz, &fmx, &fmy, &fmz, &fclamp}) v->resize(nc);
+  for (std::size_t c = 0; c < nc; ++c) fclamp[c] = static_cast<float>(m.cell_clamp[c]);
+  if (induced_moment.size() != m.induced_cells.size()) induced_moment.assign(m.induced_cells.size(), Vec3::Zero());
+  induced_targets = Targets{};
+}
+
+void evaluate(const Model& m, const Settings& st, State& s, Result& res) {
+  res.force.assign(m.body_count, Vec3::Zero());
+  res.torque.assign(m.body_count, Vec3::Zero());
+  res.moment.assign(m.body_count, Vec3::Zero());
+  res.energy = 0.0;
+  res.induction = InductionReport{};
+  res.stats = EvalStats{};
+  if (m.empty()) return;
+  if (s.cell_offset.size() != static_cast<std::size_t>(m.cell_count()) ||
+      s.node_offset.size() != static_cast<std::size_t>(m.node_count())) {
+    s.resize(m);
+  }
+
+  // 1. World geometry and permanent moments.
+  for (int b = 0; b < m.body_count; ++b) s.body_rotation[b] = s.body_pose[b].rotation.normalized().toRotationMatrix();
+  for (std::size_t p = 0; p < m.part_body.size(); ++p) s.part_rotation[p] = s.body_rotation[m.part_body[p]] * m.part_rotation[p];
+  parallel_for_each(m.cell_count(), 4096, [&](int c) {
+    const Mat3& R = s.body_rotation[m.cell_body[c]];
+    s.cell_offset[c] = R * m.cell_position[c];
+    s.permanent.cell[c] = R * m.cell_moment[c];
+  });
+  for (int n = 0; n < m.node_count(); ++n) s.node_offset[n] = s.body_rotation[m.node_body[n]] * m.node_center[n];
+  s.permanent.aggregate(m);
+
+  // 2. Induced moments (only when the scene has induced cells).
+  s.total.cell = s.permanent.cell;
+  if (m.has_induced() && st.induction != InductionMode::kOff) {
+    if (s.induced_targets.position.empty()) {
+      s.induced_targets = Targets::from_induced_cells(m, s);
+    } else {
+      s.induced_targets.update_induced_positions(m, s);
+    }
+    res.induction = solve_induction(m, st, s, res.stats);
+    for (std::size_t q = 0; q < m.induced_cells.size(); ++q) s.total.cell[m.induced_cells[q]] += s.induced_moment[q];
+  }
+  s.total.aggregate(m);
+
+  // 3. Single-precision copies for the block kernels.
+  parallel_for_each(m.cell_count(), 4096, [&](int c) {
+    s.fx[c] = float(s.cell_offset[c][0]), s.fy[c] = float(s.cell_offset[c][1]), s.fz[c] = float(s.cell_offset[c][2]);
+    const Vec3& mc = s.total.cell[c];
+    s.fmx[c] = float(mc[0]), s.fmy[c] = float(mc[1]), s.fmz[c] = float(mc[2]);
+  });
+
+  // 4. Body pairs.
+  accumulate_forces(m, st, s, res);
+
+  // 5. Total moments and the applied field (torque only; energy -m.B for permanent moments,
+  //    -1/2 m.B for induced ones).
+  for (int b = 0; b < m.body_count; ++b) {
+    const int root = m.body_root[b];
+    if (root < 0) continue;
+    res.moment[b] = s.total.node[root];
+    if (st.external_field.squaredNorm() > 0.0) {
+      const Vec3 perm = s.permanent.node[root];
+      res.torque[b] += res.moment[b].cross(st.external_field);
+      res.energy -= perm.dot(st.external_field) + 0.5 * (res.moment[b] - perm).dot(st.external_field);
+    }
+  }
+}
+
+std::vector<Vec3> field_at_points(const Model& m, const Settings& st, const State& s, std::span<const Vec3> points,
+                                  EvalStats* stats) {
+  std::vector<Vec3> out(points.size(), st.external_field);
+  if (m.empty() || points.empty()) return out;
+  const Targets t = Targets::from_points(points);
+  std::vector<Vec3> B(points.size());
+  const std::int64_t work = field_at_targets(m, s, s.total, t, FieldOptions{st.theta, st.near_field}, B);
+  if (stats) stats->field_pairs += work;
+  for (std::size_t q = 0; q < B.size(); ++q) out[t.original[q]] += B[q];
+  return out;
+}
+
+}  // namespace magbake::magnetics

@@ -1,0 +1,148 @@
+// Point-dipole kernels and the whole pipeline on single-cell bodies against the closed forms.
+#include <gtest/gtest.h>
+
+#include <numbers>
+#include <random>
+
+#include "magnetics/dipole.h"
+#include "support/closed_forms.h"
+#include "support/scenes.h"
+
+namespace magbake::testing {
+namespace {
+
+using namespace magnetics;
+
+Vec3 random_unit(std::mt19937& rng) {
+  std::normal_distribution<double> n;
+  return Vec3(n(rng), n(rng), n(rng)).normalized();
+}
+
+// F_k = grad (m_k . B_i) by a 4th-order central difference of the field formula.
+Vec3 numerical_force(const Vec3& r, const Vec3& mk, const Vec3& mi) {
+  Vec3 F;
+  const double h = 1e-4 * r.norm();
+  for (int a = 0; a < 3; ++a) {
+    Vec3 e = Vec3::Zero();
+    e[a] = h;
+    auto U = [&](const Vec3& x) { return mk.dot(point_dipole_field(mi, x)); };
+    F[a] = (-U(r + 2 * e) + 8 * U(r + e) - 8 * U(r - e) + U(r - 2 * e)) / (12 * h);
+  }
+  return F;
+}
+
+TEST(DipoleKernel, MatchesClosedFormsForRandomConfigurations) {
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> dist(0.001, 0.5), mag(1e-4, 10);
+  for (int t = 0; t < 500; ++t) {
+    const Vec3 r = dist(rng) * random_unit(rng);
+    const Vec3 mk = mag(rng) * random_unit(rng), mi = mag(rng) * random_unit(rng);
+    const DipolePair p = dipole_pair(r, mk, mi);
+    const Vec3 B = point_dipole_field(mi, r);
+    EXPECT_LT((dipole_field(r, mi) - B).norm(), 1e-13 * B.norm());
+    EXPECT_LT((p.torque - mk.cross(B)).norm(), 1e-12 * mk.norm() * B.norm());
+    EXPECT_NEAR(p.energy, -mk.dot(B), 1e-12 * mk.norm() * B.norm());
+    const Vec3 Fn = numerical_force(r, mk, mi);
+    EXPECT_LT((p.force - Fn).norm(), 1e-7 * Fn.norm() + 1e-12 * p.force.norm()) << t;
+    // Newton's third law and the torque balance of one pair (physics-notes §2).
+    const DipolePair q = dipole_pair(-r, mi, mk);
+    EXPECT_LT((p.force + q.force).norm(), 1e-13 * p.force.norm());
+    EXPECT_LT((r.cross(p.force) + p.torque + q.torque).norm(), 1e-12 * (r.norm() * p.force.norm() + p.torque.norm()));
+  }
+}
+
+TEST(DipoleKernel, GradientMatchesFiniteDifferences) {
+  std::mt19937 rng(3);
+  for (int t = 0; t < 50; ++t) {
+    const Vec3 r = 0.05 * random_unit(rng), m = random_unit(rng);
+    Vec3 B;
+    Mat3 G;
+    dipole_field_gradient(r, m, B, G);
+    const double h = 1e-6;
+    for (int b = 0; b < 3; ++b) {
+      Vec3 e = Vec3::Zero();
+      e[b] = h;
+      const Vec3 dB = (dipole_field(r + e, m) - dipole_field(r - e, m)) / (2 * h);
+      EXPECT_LT((G.col(b) - dB).norm(), 1e-6 * G.norm());
+    }
+  }
+}
+
+TEST(DipoleKernel, ClampKeepsDirectionAndBoundsTheForce) {
+  const Vec3 mk(0, 0, 1), mi(0, 0, 1);
+  const DipolePair near = dipole_pair(Vec3(0, 0, 1e-6), mk, mi, 1e-3);
+  const DipolePair at = dipole_pair(Vec3(0, 0, 1e-3), mk, mi);
+  EXPECT_LT((near.force - at.force).norm(), 1e-12 * at.force.norm());
+}
+
+// Uniformly magnetized spheres are exact dipoles: bodies of one cell each, through the library,
+// in both kernel precisions and any theta.
+TEST(DipolePipeline, SingleCellSpheresGiveExactDipoleForcesAndTorques) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int t = 0; t < 40; ++t) {
+    Rig s;
+    s.add(std::make_unique<geometry::SphereShape>(0.002), permanent(1.2, random_unit(rng)));
+    s.add(std::make_unique<geometry::SphereShape>(0.003), permanent(0.8, random_unit(rng)));
+    s.build(0.01);  // one cell per sphere
+    ASSERT_EQ(s.model.cell_count(), 2);
+    s.state.body_pose[0].position = Vec3(u(rng), u(rng), u(rng)) * 0.01;
+    s.state.body_pose[0].rotation = Quat(Eigen::AngleAxisd(3 * u(rng), random_unit(rng)));
+    s.state.body_pose[1].position = s.state.body_pose[0].position + (0.006 + 0.05 * (u(rng) + 1)) * random_unit(rng);
+    s.state.body_pose[1].rotation = Quat(Eigen::AngleAxisd(3 * u(rng), random_unit(rng)));
+    const Vec3 m0 = s.state.body_pose[0].rotation * s.model.cell_moment[0];
+    const Vec3 m1 = s.state.body_pose[1].rotation * s.model.cell_moment[1];
+    // Cell moment = M V of the true sphere volume.
+    EXPECT_NEAR(m0.norm(), 1.2 / kMu0 * 4.0 / 3.0 * std::numbers::pi * 8e-9, 1e-12 * m0.norm());
+    const Vec3 r = s.state.body_pose[1].position - s.state.body_pose[0].position;
+    const DipolePair ref = dipole_pair(r, m1, m0);
+    for (auto prec : {KernelPrecision::kSingle, KernelPrecision::kDouble}) {
+      for (double theta : {0.0, 0.5, 1.0}) {
+        Settings st;
+        st.precision = prec;
+        st.theta = theta;
+        st.near_field = 0.0;
+        Result res;
+        evaluate(s.model, st, s.state, res);
+        const double tol = prec == KernelPrecision::kSingle ? 2e-6 : 1e-12;
+        EXPECT_LT((res.force[1] - ref.force).norm(), tol * ref.force.norm());
+        EXPECT_LT((res.torque[1] - ref.torque).norm(), tol * (ref.torque.norm() + r.norm() * ref.force.norm()));
+        EXPECT_LT((res.force[0] + ref.force).norm(), tol * ref.force.norm());
+        // Body 0's torque about its own centre: -(T_1 + r x F_1).
+        const Vec3 t0 = -(ref.torque + r.cross(ref.force));
+        EXPECT_LT((res.torque[0] - t0).norm(), tol * (t0.norm() + r.norm() * ref.force.norm()));
+        // Energy -m.B can be small by cancellation: compare against |m1| |B| instead.
+        EXPECT_NEAR(res.energy, ref.energy, tol * 10 * m1.norm() * dipole_field(r, m0).norm());
+      }
+    }
+    // Field of body 0 at points outside it: the exact dipole field plus body 1's.
+    Settings st;
+    Result res;
+    evaluate(s.model, st, s.state, res);
+    for (int q = 0; q < 10; ++q) {
+      const Vec3 x = s.state.body_pose[0].position + (0.0025 + 0.1 * (u(rng) + 1)) * random_unit(rng);
+      if ((x - s.state.body_pose[1].position).norm() < 0.0035) continue;
+      const Vec3 B = field_at_points(s.model, st, s.state, std::span<const Vec3>(&x, 1))[0];
+      const Vec3 ref_b = point_dipole_field(m0, x - s.state.body_pose[0].position) +
+                         point_dipole_field(m1, x - s.state.body_pose[1].position);
+      EXPECT_LT((B - ref_b).norm(), 1e-9 * ref_b.norm());
+    }
+  }
+}
+
+TEST(DipolePipeline, UniformAppliedFieldTurnsAMagnetWithoutForce) {
+  Rig s;
+  s.add(std::make_unique<geometry::SphereShape>(0.002), permanent(1.0, Vec3::UnitX()));
+  s.build(0.01);
+  Settings st;
+  st.external_field = Vec3(0, 0, 0.05);
+  Result r;
+  evaluate(s.model, st, s.state, r);
+  const Vec3 m = s.model.cell_moment[0];
+  EXPECT_EQ(r.force[0], Vec3::Zero());
+  EXPECT_LT((r.torque[0] - m.cross(st.external_field)).norm(), 1e-15);
+  EXPECT_NEAR(r.energy, -m.dot(st.external_field), 1e-18);
+}
+
+}  // namespace
+}  // namespace magbake::testing
