@@ -58,10 +58,11 @@ void block_scalar(const State& s, int tb, int te, int sb, int se, const Vec3& de
 }
 
 #ifdef MAGBAKE_AVX2
-inline __m256 rsqrt_nr(__m256 x) {
+// Twice the reciprocal square root, to full float precision: z = y (3 - x y²) with y = rsqrt(x)
+// (one Newton step; the factor 2 is folded into the constants of the caller).
+inline __m256 rsqrt2_nr(__m256 x) {
   const __m256 y = _mm256_rsqrt_ps(x);
-  const __m256 hx = _mm256_mul_ps(_mm256_set1_ps(0.5f), x);
-  return _mm256_mul_ps(y, _mm256_fnmadd_ps(_mm256_mul_ps(hx, y), y, _mm256_set1_ps(1.5f)));
+  return _mm256_mul_ps(y, _mm256_fnmadd_ps(x, _mm256_mul_ps(y, y), _mm256_set1_ps(3.0f)));
 }
 
 inline double hsum(__m256 v) {
@@ -72,7 +73,9 @@ inline double hsum(__m256 v) {
   return s;
 }
 
-// Targets in the 8 lanes, sources broadcast; per-lane sums over all sources.
+// Targets in the 8 lanes, sources broadcast; per-lane sums over all sources. The loop is
+// bound by the number of vector operations (~50 per 8 pairs), so constants are folded and the
+// torque and energy are formed once per target from the accumulated field.
 template <bool kClamp>
 void block_avx2(const State& s, int tb, int te, int sb, int se, const Vec3& delta, BlockSum& out) {
   alignas(32) float px[kChunk], py[kChunk], pz[kChunk], mx[kChunk], my[kChunk], mz[kChunk], cl[kChunk];
@@ -97,46 +100,49 @@ void block_avx2(const State& s, int tb, int te, int sb, int se, const Vec3& delt
       const __m256 Z = _mm256_add_ps(PZ, _mm256_set1_ps(dz));
       const __m256 MX = _mm256_load_ps(mx + q), MY = _mm256_load_ps(my + q), MZ = _mm256_load_ps(mz + q);
       const __m256 CL = _mm256_load_ps(cl + q);
-      __m256 FX = _mm256_setzero_ps(), FY = FX, FZ = FX, TX = FX, TY = FX, TZ = FX, UU = FX;
-      const __m256 five = _mm256_set1_ps(5.0f), three = _mm256_set1_ps(3.0f);
+      // Per target: F (force) and B (field of all sources). Torque mk x B and energy -mk.B
+      // follow after the loop, since mk is the same for every source.
+      __m256 FX = _mm256_setzero_ps(), FY = FX, FZ = FX, BX = FX, BY = FX, BZ = FX;
       for (int i = sb; i < se; ++i) {
         __m256 rx = _mm256_sub_ps(X, _mm256_set1_ps(s.fx[i]));
         __m256 ry = _mm256_sub_ps(Y, _mm256_set1_ps(s.fy[i]));
         __m256 rz = _mm256_sub_ps(Z, _mm256_set1_ps(s.fz[i]));
         const __m256 bmx = _mm256_set1_ps(s.fmx[i]), bmy = _mm256_set1_ps(s.fmy[i]), bmz = _mm256_set1_ps(s.fmz[i]);
         __m256 d2 = _mm256_fmadd_ps(rz, rz, _mm256_fmadd_ps(ry, ry, _mm256_mul_ps(rx, rx)));
-        __m256 inv = rsqrt_nr(d2);
+        __m256 z = rsqrt2_nr(d2);  // 2/d
         if constexpr (kClamp) {
           // Keep the direction, lengthen r to at least the contact distance of the two cells.
           const __m256 dmin = _mm256_add_ps(CL, _mm256_set1_ps(s.fclamp[i]));
-          const __m256 dist = _mm256_mul_ps(d2, inv);
-          const __m256 sc = _mm256_max_ps(_mm256_set1_ps(1.0f), _mm256_mul_ps(dmin, inv));
+          const __m256 sc = _mm256_max_ps(_mm256_set1_ps(1.0f), _mm256_mul_ps(dmin, _mm256_mul_ps(_mm256_set1_ps(0.5f), z)));
           rx = _mm256_mul_ps(rx, sc), ry = _mm256_mul_ps(ry, sc), rz = _mm256_mul_ps(rz, sc);
-          const __m256 dc = _mm256_max_ps(dist, dmin);
-          d2 = _mm256_mul_ps(dc, dc);
-          inv = rsqrt_nr(d2);
+          d2 = _mm256_mul_ps(d2, _mm256_mul_ps(sc, sc));
+          z = rsqrt2_nr(d2);
         }
-        const __m256 inv2 = _mm256_mul_ps(inv, inv);
-        const __m256 inv5 = _mm256_mul_ps(_mm256_mul_ps(inv2, inv2), inv);
-        const __m256 a = _mm256_fmadd_ps(MZ, rz, _mm256_fmadd_ps(MY, ry, _mm256_mul_ps(MX, rx)));
-        const __m256 b = _mm256_fmadd_ps(bmz, rz, _mm256_fmadd_ps(bmy, ry, _mm256_mul_ps(bmx, rx)));
-        const __m256 c = _mm256_fmadd_ps(MZ, bmz, _mm256_fmadd_ps(MY, bmy, _mm256_mul_ps(MX, bmx)));
-        const __m256 sc = _mm256_fnmadd_ps(_mm256_mul_ps(five, _mm256_mul_ps(a, b)), inv2, c);
-        // F/(3K) += inv5 (a mi + b mk + s r)
-        FX = _mm256_fmadd_ps(inv5, _mm256_fmadd_ps(sc, rx, _mm256_fmadd_ps(b, MX, _mm256_mul_ps(a, bmx))), FX);
-        FY = _mm256_fmadd_ps(inv5, _mm256_fmadd_ps(sc, ry, _mm256_fmadd_ps(b, MY, _mm256_mul_ps(a, bmy))), FY);
-        FZ = _mm256_fmadd_ps(inv5, _mm256_fmadd_ps(sc, rz, _mm256_fmadd_ps(b, MZ, _mm256_mul_ps(a, bmz))), FZ);
-        // B/K = inv5 (3 b r - d2 mi); T/K += mk x B; U/K += mk . B
-        const __m256 b3 = _mm256_mul_ps(three, b);
-        const __m256 Bx = _mm256_mul_ps(inv5, _mm256_fmsub_ps(b3, rx, _mm256_mul_ps(d2, bmx)));
-        const __m256 By = _mm256_mul_ps(inv5, _mm256_fmsub_ps(b3, ry, _mm256_mul_ps(d2, bmy)));
-        const __m256 Bz = _mm256_mul_ps(inv5, _mm256_fmsub_ps(b3, rz, _mm256_mul_ps(d2, bmz)));
-        TX = _mm256_add_ps(TX, _mm256_fmsub_ps(MY, Bz, _mm256_mul_ps(MZ, By)));
-        TY = _mm256_add_ps(TY, _mm256_fmsub_ps(MZ, Bx, _mm256_mul_ps(MX, Bz)));
-        TZ = _mm256_add_ps(TZ, _mm256_fmsub_ps(MX, By, _mm256_mul_ps(MY, Bx)));
-        UU = _mm256_fmadd_ps(MZ, Bz, _mm256_fmadd_ps(MY, By, _mm256_fmadd_ps(MX, Bx, UU)));
+        // In units of 1/d = z/2: inv2 = z²/4, inv5 = z⁵/32 (the 1/4, 1/32 go into the constants).
+        const __m256 z2 = _mm256_mul_ps(z, z);
+        const __m256 z5 = _mm256_mul_ps(_mm256_mul_ps(z2, z2), z);
+        const __m256 a = _mm256_fmadd_ps(MZ, rz, _mm256_fmadd_ps(MY, ry, _mm256_mul_ps(MX, rx)));   // mk.r
+        const __m256 b = _mm256_fmadd_ps(bmz, rz, _mm256_fmadd_ps(bmy, ry, _mm256_mul_ps(bmx, rx)));  // mi.r
+        const __m256 c = _mm256_fmadd_ps(MZ, bmz, _mm256_fmadd_ps(MY, bmy, _mm256_mul_ps(MX, bmx)));  // mk.mi
+        const __m256 a5 = _mm256_mul_ps(a, z5), b5 = _mm256_mul_ps(b, z5), d5 = _mm256_mul_ps(d2, z5);
+        // B'/K = 3 b5 r - d5 mi (x 32)
+        const __m256 b3 = _mm256_mul_ps(b5, _mm256_set1_ps(3.0f));
+        BX = _mm256_fnmadd_ps(d5, bmx, _mm256_fmadd_ps(b3, rx, BX));
+        BY = _mm256_fnmadd_ps(d5, bmy, _mm256_fmadd_ps(b3, ry, BY));
+        BZ = _mm256_fnmadd_ps(d5, bmz, _mm256_fmadd_ps(b3, rz, BZ));
+        // F/(3K) = a5 mi + b5 mk + (c z5 - 5 a b5 z²/4) r   (x 32)
+        const __m256 ab = _mm256_mul_ps(a, b5);
+        const __m256 s5 = _mm256_fnmadd_ps(ab, _mm256_mul_ps(z2, _mm256_set1_ps(1.25f)), _mm256_mul_ps(c, z5));
+        FX = _mm256_fmadd_ps(s5, rx, _mm256_fmadd_ps(b5, MX, _mm256_fmadd_ps(a5, bmx, FX)));
+        FY = _mm256_fmadd_ps(s5, ry, _mm256_fmadd_ps(b5, MY, _mm256_fmadd_ps(a5, bmy, FY)));
+        FZ = _mm256_fmadd_ps(s5, rz, _mm256_fmadd_ps(b5, MZ, _mm256_fmadd_ps(a5, bmz, FZ)));
       }
-      // Lever arm about the target body's origin: G = 3 p x F' + T'.
+      // Torque mk x B, energy mk.B, and the lever arm about the body origin: G = 3 p x F' + T'.
+      const __m256 TX = _mm256_fmsub_ps(MY, BZ, _mm256_mul_ps(MZ, BY));
+      const __m256 TY = _mm256_fmsub_ps(MZ, BX, _mm256_mul_ps(MX, BZ));
+      const __m256 TZ = _mm256_fmsub_ps(MX, BY, _mm256_mul_ps(MY, BX));
+      const __m256 UU = _mm256_fmadd_ps(MZ, BZ, _mm256_fmadd_ps(MY, BY, _mm256_mul_ps(MX, BX)));
+      const __m256 three = _mm256_set1_ps(3.0f);
       const __m256 GX = _mm256_fmadd_ps(three, _mm256_fmsub_ps(PY, FZ, _mm256_mul_ps(PZ, FY)), TX);
       const __m256 GY = _mm256_fmadd_ps(three, _mm256_fmsub_ps(PZ, FX, _mm256_mul_ps(PX, FZ)), TY);
       const __m256 GZ = _mm256_fmadd_ps(three, _mm256_fmsub_ps(PX, FY, _mm256_mul_ps(PY, FX)), TZ);
@@ -145,9 +151,10 @@ void block_avx2(const State& s, int tb, int te, int sb, int se, const Vec3& delt
       u += hsum(UU);
     }
   }
-  out.force = 3.0 * kMu0Over4Pi * Vec3(f[0], f[1], f[2]);
-  out.torque = kMu0Over4Pi * Vec3(g[0], g[1], g[2]);
-  out.energy = -kMu0Over4Pi * u;
+  constexpr double k32 = 1.0 / 32.0;  // z⁵ = 32 / d⁵
+  out.force = 3.0 * kMu0Over4Pi * k32 * Vec3(f[0], f[1], f[2]);
+  out.torque = kMu0Over4Pi * k32 * Vec3(g[0], g[1], g[2]);
+  out.energy = -kMu0Over4Pi * k32 * u;
 }
 #endif
 
