@@ -1,8 +1,13 @@
 // magbake: command-line baker for magnetic rigid-body shots.
 #include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_sinks.h>
+#include <spdlog/spdlog.h>
+#include <tbb/global_control.h>
 
 #include <cstdio>
+#include <memory>
 
+#include "cli.h"
 #include "geometry/shapes.h"
 #include "magnetics/system.h"
 
@@ -10,14 +15,14 @@ namespace {
 
 using namespace magbake;
 
-// Library demo until `magbake bake` exists: the paper's cube pair (Fig. 6).
+// Library demo: the paper's cube pair (Fig. 6).
 int run_cubes(double gap_mm, double cell_mm, double theta) {
   geometry::BoxShape cube(magnetics::Vec3(0.01, 0.01, 0.01));
-  magnetics::Material n42;
-  n42.kind = magnetics::MaterialKind::kPermanent;
-  n42.remanence = 1.0;
+  magnetics::Material j1;
+  j1.kind = magnetics::MaterialKind::kPermanent;
+  j1.remanence = 1.0;
   std::vector<magnetics::BodySpec> bodies(2);
-  for (auto& b : bodies) b.parts.push_back({&cube, {}, n42});
+  for (auto& b : bodies) b.parts.push_back({&cube, {}, j1});
   magnetics::BuildSettings bs;
   bs.cell_size = cell_mm * 1e-3;
   const magnetics::Model model = magnetics::build_model(bodies, bs);
@@ -38,14 +43,63 @@ int run_cubes(double gap_mm, double cell_mm, double theta) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"magbake - baker for magnetic rigid-body shots"};
+  CLI::App app{"magbake - baker for magnetic rigid-body shots (scene -> HDF5 cache, field volumes, previews)"};
   app.require_subcommand(1);
+  cli::Global g;
+  app.add_option("--threads", g.threads, "worker threads (0 = all cores)")->capture_default_str();
+  app.add_flag("-q,--quiet", g.quiet, "only warnings and errors on stderr");
+  app.add_flag("-v,--verbose", g.verbose, "debug messages on stderr");
+
+  std::string scene_path;
+  double time = 0;
+  bool json = false;
+
+  auto* check = app.add_subcommand("check", "validate a scene and print a one-screen summary with its cost (exit 0/2)");
+  check->add_option("scene", scene_path, "scene file (YAML)")->required();
+
+  auto* info = app.add_subcommand("info", "human-readable summary of a scene");
+  info->add_option("file", scene_path, "scene file (YAML)")->required();
+
+  auto* eval = app.add_subcommand("eval", "forces, torques and moments of every body at one instant");
+  eval->add_option("scene", scene_path, "scene file (YAML)")->required();
+  eval->add_option("--time", time, "time in seconds (kinematic bodies at their keyed pose)")->capture_default_str();
+  eval->add_flag("--json", json, "JSON on stdout (SI units)");
+
+  std::vector<std::string> at;
+  std::string points_file;
+  auto* probe = app.add_subcommand("probe", "magnetic flux density B (tesla) at points");
+  probe->add_option("scene", scene_path, "scene file (YAML)")->required();
+  probe->add_option("--at", at, "a point X,Y,Z in metres (repeatable)")->take_all();
+  probe->add_option("--points", points_file, "file with one point per line: x y z or x,y,z (metres)");
+  probe->add_option("--time", time, "time in seconds")->capture_default_str();
+  probe->add_flag("--json", json, "JSON on stdout");
+
   double gap = 5, cell = 2.5, theta = 0.5;
   auto* cubes = app.add_subcommand("cubes", "library demo: force between the paper's two 1 cm cube magnets");
   cubes->add_option("--gap", gap, "face gap, mm")->capture_default_str();
   cubes->add_option("--cell", cell, "cell size, mm")->capture_default_str();
   cubes->add_option("--theta", theta, "opening angle")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : cli::kUsage;
+  }
+
+  auto logger = spdlog::stderr_logger_mt("magbake");
+  logger->set_pattern("magbake: %l: %v");
+  logger->set_level(g.quiet ? spdlog::level::warn : g.verbose ? spdlog::level::debug : spdlog::level::info);
+  spdlog::set_default_logger(logger);
+  std::unique_ptr<tbb::global_control> threads;
+  if (g.threads > 0) {
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, g.threads);
+  }
+
+  if (*check) return cli::cmd_check(scene_path, g);
+  if (*info) return cli::cmd_info(scene_path, g);
+  if (*eval) return cli::cmd_eval(scene_path, time, json, g);
+  if (*probe) return cli::cmd_probe(scene_path, at, points_file, time, json, g);
   if (*cubes) return run_cubes(gap, cell, theta);
-  return 2;
+  return cli::kUsage;
 }

@@ -14,7 +14,7 @@ packages=(
   libhdf5-dev hdf5-tools libopenvdb-dev libboost-iostreams-dev libopenvdb-tools
   libosmesa6-dev libpng-dev
   # command line and logging
-  libcli11-dev libspdlog-dev libfmt-dev
+  libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libssl-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # independent readers and plots used by tests and bench scripts (Debian's /usr/bin/python3)

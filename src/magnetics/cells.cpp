@@ -25,12 +25,12 @@ struct PartCells {
 // Decomposes one solid into grid cells of edge <= cell_size. Boundary cells keep the inside
 // fraction of their volume and the centroid of that inside part (both from sub-samples); the
 // cuboid of every cell stays on the lattice, so neighbouring cuboids never overlap.
-PartCells decompose(const Solid& solid, const BuildSettings& s, std::int64_t budget) {
+PartCells decompose(const Solid& solid, double cell_size, const BuildSettings& s, std::int64_t budget) {
   const Box3 box = solid.bounds();
   const Vec3 size = box.sizes();
   Eigen::Vector3i n;
   for (int a = 0; a < 3; ++a) {
-    n[a] = std::max(1, static_cast<int>(std::ceil(size[a] / s.cell_size - 1e-9)));
+    n[a] = std::max(1, static_cast<int>(std::ceil(size[a] / cell_size - 1e-9)));
   }
   const std::int64_t total = std::int64_t(n[0]) * n[1] * n[2];
   if (total > budget) {
@@ -130,6 +130,7 @@ struct TreeBuilder {
     m.node_begin.push_back(0);
     m.node_end.push_back(0);
     m.node_child.push_back(-1);
+    m.node_nchild.push_back(0);
     m.node_body.push_back(body);
     m.node_center.push_back(Vec3::Zero());
     m.node_radius.push_back(0);
@@ -170,31 +171,47 @@ struct TreeBuilder {
     m.node_induced[node] = induced;
     if (end - begin <= leaf_size) return;
 
-    // Split at the middle of the longest axis; fall back to the median if one side is empty.
-    int axis;
-    bb.sizes().maxCoeff(&axis);
-    const double mid = bb.center()[axis];
-    auto first = perm.begin() + begin, last = perm.begin() + end;
-    auto split = std::stable_partition(first, last, [&](int id) { return bc.pos[id][axis] < mid; });
-    if (split == first || split == last) {
-      split = first + (end - begin) / 2;
+    // Bisect at the middle along every axis at least 0.6 times the longest one (up to 8
+    // children, like an octree): nodes stay near-cubic, and a near-cubic uniformly magnetized
+    // node is a dipole up to fourth order, where a slab or rod from a single bisection is not.
+    const Vec3 size = bb.sizes();
+    const Vec3 mid = bb.center();
+    std::vector<std::pair<int, int>> ranges{{begin, end}};
+    for (int axis = 0; axis < 3; ++axis) {
+      if (size[axis] < 0.6 * size.maxCoeff() || size[axis] <= 0.0) continue;
+      std::vector<std::pair<int, int>> next;
+      for (auto [b0, e0] : ranges) {
+        auto first = perm.begin() + b0, last = perm.begin() + e0;
+        auto split = std::stable_partition(first, last, [&](int id) { return bc.pos[id][axis] < mid[axis]; });
+        const int cut = static_cast<int>(split - perm.begin());
+        if (cut > b0) next.emplace_back(b0, cut);
+        if (cut < e0) next.emplace_back(cut, e0);
+      }
+      ranges.swap(next);
+    }
+    if (ranges.size() < 2) {
+      // All centres on one side of every midpoint (degenerate): split at the median.
+      int axis;
+      size.maxCoeff(&axis);
+      auto first = perm.begin() + begin, last = perm.begin() + end;
+      auto split = first + (end - begin) / 2;
       std::nth_element(first, split, last, [&](int a, int b) {
         return bc.pos[a][axis] < bc.pos[b][axis] || (bc.pos[a][axis] == bc.pos[b][axis] && a < b);
       });
+      const int cut = static_cast<int>(split - perm.begin());
+      ranges = {{begin, cut}, {cut, end}};
     }
-    const int cut = static_cast<int>(split - perm.begin());
-    const int left = new_node();
-    new_node();
-    m.node_child[node] = left;
-    build(left, begin, cut);
-    build(left + 1, cut, end);
+    const int first_child = m.node_count();
+    for (std::size_t k = 0; k < ranges.size(); ++k) new_node();
+    m.node_child[node] = first_child;
+    m.node_nchild[node] = static_cast<int>(ranges.size());
+    for (std::size_t k = 0; k < ranges.size(); ++k) build(first_child + static_cast<int>(k), ranges[k].first, ranges[k].second);
   }
 };
 
 }  // namespace
 
 Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& settings) {
-  if (!(settings.cell_size > 0.0)) throw std::runtime_error("magnetics: cell_size must be positive");
   Model m;
   m.body_count = static_cast<int>(bodies.size());
   m.body_cell_begin.assign(bodies.size() + 1, 0);
@@ -214,7 +231,9 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
       const Mat3 R = ps.part_to_body.rotation.toRotationMatrix();
       const Vec3 M = R * ps.material.magnetization();
       const double chi = ps.material.induced() ? ps.material.susceptibility() : 0.0;
-      PartCells pc = decompose(*ps.solid, settings, budget);
+      const double cell = ps.cell_size > 0 ? ps.cell_size : settings.cell_size;
+      if (!(cell > 0)) throw std::runtime_error("magnetics: cell_size must be positive");
+      PartCells pc = decompose(*ps.solid, cell, settings, budget);
       if (pc.centroid.empty()) {
         throw std::runtime_error("magnetics: body " + std::to_string(b) +
                                  " has a part with no cell inside it; lower magnetics.cell_size");

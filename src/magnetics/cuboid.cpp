@@ -89,6 +89,13 @@ Rule gauss_rule(int n, bool cluster) {
   return r;
 }
 
+// Insertion sort of a few values (std::sort on a short std::array trips GCC 12's -Warray-bounds).
+void sort_small(double* a, int n) {
+  for (int i = 1; i < n; ++i) {
+    for (int j = i; j > 0 && a[j] < a[j - 1]; --j) std::swap(a[j], a[j - 1]);
+  }
+}
+
 // Index of the axis of i's frame that unit vector e is parallel to (-1 if none).
 int parallel_axis(const Vec3& e) {
   for (int a = 0; a < 3; ++a) {
@@ -147,16 +154,20 @@ void cuboid_pair(const Cuboid& k, const Cuboid& i, int order, Vec3& force, Vec3&
       int nu = 2, nv = 2;
       bool touching = false;
       if (aligned) {
-        auto add_splits = [&](int axis, const Vec3& e, double h, std::array<double, 4>& s, int& n) {
-          for (int sg = -1; sg <= 1; sg += 2) {
-            const double t = (sg * i.half[axis] - fc[axis]) / e[axis];
-            if (t > -h + 1e-12 * scale && t < h - 1e-12 * scale) s[n++] = t;
-          }
-          std::sort(s.begin(), s.begin() + n);
-        };
-        add_splits(au, eu, k.half[u], su, nu);
-        add_splits(av, ev, k.half[v], sv, nv);
+        // Splits and clustered nodes are only needed where k's face lies in the plane of one of
+        // i's faces (contact); elsewhere the integrand is smooth over the whole face.
         touching = std::abs(std::abs(fc[aw]) - i.half[aw]) < 1e-6 * scale;
+        if (touching) {
+          auto add_splits = [&](int axis, const Vec3& e, double h, std::array<double, 4>& sp, int& n) {
+            for (int sg = -1; sg <= 1; sg += 2) {
+              const double t = (sg * i.half[axis] - fc[axis]) / e[axis];
+              if (t > -h + 1e-12 * scale && t < h - 1e-12 * scale) sp[n++] = t;
+            }
+            sort_small(sp.data(), n);
+          };
+          add_splits(au, eu, k.half[u], su, nu);
+          add_splits(av, ev, k.half[v], sv, nv);
+        }
       } else {
         // Rotated: only the distance between the face and i tells whether to cluster nodes.
         touching = true;
@@ -210,7 +221,7 @@ Mat3 cuboid_mean_field_tensor(const Cuboid& target, const Cuboid& source, int or
       const double t = (sg * hs[sa] - ct[sa]) / dir;
       if (t > -ht[a] * (1 - 1e-12) && t < ht[a] * (1 - 1e-12)) cut[a][ncut[a]++] = t;
     }
-    std::sort(cut[a].begin(), cut[a].begin() + ncut[a]);
+    sort_small(cut[a].data(), ncut[a]);
   }
   const Rule rule = gauss_rule(order, true);
   Mat3 N = Mat3::Zero();

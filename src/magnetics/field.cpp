@@ -26,8 +26,12 @@ void Sources::aggregate(const Model& m) {
       node[n] = sum;
       node_active[n] = any;
     } else {
-      node[n] = node[ch] + node[ch + 1];
-      node_active[n] = node_active[ch] || node_active[ch + 1];
+      node[n] = Vec3::Zero();
+      node_active[n] = 0;
+      for (int k = ch; k < ch + m.node_nchild[n]; ++k) {
+        node[n] += node[k];
+        node_active[n] = node_active[n] || node_active[k];
+      }
     }
   }
 }
@@ -150,8 +154,8 @@ std::int64_t field_at_targets(const Model& m, const State& s, const Sources& src
         }
         const int ch = m.node_child[n];
         if (ch >= 0) {
-          stack[top++] = ch + 1;
-          stack[top++] = ch;
+          assert(top + m.node_nchild[n] <= 128);
+          for (int k = ch + m.node_nchild[n] - 1; k >= ch; --k) stack[top++] = k;
           continue;
         }
         // Leaf: every cell, point dipoles, exact cuboids where near.

@@ -64,8 +64,7 @@ void build_near_rows(const Model& m, const Settings& st, State& s) {
         const double gap = (origin + s.node_offset[nd] - t.group_center[g]).norm() - m.node_radius[nd] - t.group_radius[g];
         if (gap > m.induction_near * (m.node_reach[nd] + reach)) continue;
         if (m.node_child[nd] >= 0) {
-          stack.push_back(m.node_child[nd] + 1);
-          stack.push_back(m.node_child[nd]);
+          for (int k = m.node_child[nd] + m.node_nchild[nd] - 1; k >= m.node_child[nd]; --k) stack.push_back(k);
           continue;
         }
         for (int q = t.group_begin[g]; q < t.group_begin[g + 1]; ++q) {

@@ -17,6 +17,7 @@ struct PartSpec {
   const Solid* solid = nullptr;  ///< not owned; only used during build_model()
   Pose part_to_body;             ///< part frame -> body frame
   Material material;
+  double cell_size = 0;          ///< finest cell edge for this part, m (0: BuildSettings::cell_size)
 };
 
 /// One rigid body. Its frame's origin is the point torques are reported about (the caller
@@ -92,9 +93,10 @@ struct Model {
   std::vector<int> near_cell;            ///< source cell of each entry (same body)
   std::vector<Mat3> near_tensor;         ///< T/(A·m²), body frame
 
-  // ---- hierarchy nodes (nnode); children of node n are node_child[n] and node_child[n]+1
+  // ---- hierarchy nodes (nnode); children of node n are node_child[n] .. + node_nchild[n] - 1
   std::vector<int> node_begin, node_end; ///< (nnode) cell range
   std::vector<int> node_child;           ///< (nnode) first child, -1 for a leaf
+  std::vector<int> node_nchild;          ///< (nnode) number of children (2..8), 0 for a leaf
   std::vector<int> node_body;            ///< (nnode) owning body
   std::vector<Vec3> node_center;         ///< (nnode x 3) volume centroid of the cells, body frame, m
   std::vector<double> node_radius;       ///< (nnode) bounding radius of the cells' cuboids, m

@@ -117,9 +117,12 @@ TEST(Hierarchy, NodesAggregateAndBoundTheirCells) {
     if (ch < 0) {
       EXPECT_LE(m.node_end[n] - m.node_begin[n], 16);
     } else {
+      // Children tile the parent's cell range in order.
+      ASSERT_GE(m.node_nchild[n], 2);
+      ASSERT_LE(m.node_nchild[n], 8);
       EXPECT_EQ(m.node_begin[ch], m.node_begin[n]);
-      EXPECT_EQ(m.node_end[ch], m.node_begin[ch + 1]);
-      EXPECT_EQ(m.node_end[ch + 1], m.node_end[n]);
+      for (int k = ch; k + 1 < ch + m.node_nchild[n]; ++k) EXPECT_EQ(m.node_end[k], m.node_begin[k + 1]);
+      EXPECT_EQ(m.node_end[ch + m.node_nchild[n] - 1], m.node_end[n]);
     }
   }
   EXPECT_EQ(m.induced_cells.size(), static_cast<std::size_t>(m.part_report[1].cells));

@@ -1,0 +1,86 @@
+#include "cli.h"
+
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+namespace magbake::cli {
+
+std::optional<scene::Scene> load_or_report(const std::string& path) {
+  try {
+    return scene::load_scene(path);
+  } catch (const scene::SceneError& e) {
+    std::cerr << e.diagnostics().format();
+    std::cerr << "magbake: " << e.diagnostics().items().size() << " problem(s) in " << path << "; nothing written\n";
+    return std::nullopt;
+  }
+}
+
+nlohmann::json json_vec(const Eigen::Vector3d& v) { return nlohmann::json::array({v[0], v[1], v[2]}); }
+
+void print_json(const nlohmann::json& j) { std::cout << j.dump(2) << '\n' << std::flush; }
+
+namespace {
+const char* motion_name(scene::Motion m) {
+  switch (m) {
+    case scene::Motion::kDynamic: return "dynamic";
+    case scene::Motion::kStatic: return "static";
+    case scene::Motion::kKinematic: return "kinematic";
+  }
+  return "?";
+}
+}  // namespace
+
+std::string scene_summary(const scene::Scene& s) {
+  std::ostringstream os;
+  char buf[512];
+  os << "scene    " << s.name << "  (" << s.file << ", sha256 " << s.hash.substr(0, 12) << ")\n";
+  std::snprintf(buf, sizeof buf, "units    length %s, angle %s (everything below in SI)\n", s.length_unit.c_str(),
+                s.angle_unit.c_str());
+  os << buf;
+  const int frames = s.last_frame - s.first_frame + 1;
+  const double duration = (s.last_frame - s.first_frame) / s.fps;
+  std::snprintf(buf, sizeof buf, "time     %g fps, frames %d-%d (%d frames, %.3g s), substep %.4g ms (%.0f substeps)\n",
+                s.fps, s.first_frame, s.last_frame, frames, duration, s.dt * 1e3, std::ceil(duration / s.dt - 1e-9));
+  os << buf;
+  std::snprintf(buf, sizeof buf, "gravity  %g %g %g m/s²\n", s.gravity[0], s.gravity[1], s.gravity[2]);
+  os << buf;
+  const auto& m = s.magnetics;
+  std::snprintf(buf, sizeof buf,
+                "magnetics quality %s: cell size %s, theta %g, near field %g cells (order %d), induction %s, "
+                "applied field %g %g %g T\n",
+                m.quality.c_str(),
+                m.cell_size ? (std::to_string(*m.cell_size * 1e3) + " mm").c_str()
+                            : ("extent/" + std::to_string(m.cells_per_extent)).c_str(),
+                m.theta, m.near_field, m.near_field_order, m.induction.c_str(), m.external_field[0],
+                m.external_field[1], m.external_field[2]);
+  os << buf;
+  os << "materials";
+  for (const auto& mt : s.materials) {
+    os << "  " << mt.name << " (" << mt.kind_name;
+    if (mt.kind == magnetics::MaterialKind::kPermanent) os << ", " << mt.remanence << " T";
+    if (mt.kind == magnetics::MaterialKind::kLinear) os << ", chi " << mt.chi;
+    os << ")";
+  }
+  os << "\nbodies   " << s.bodies.size() << "\n";
+  std::snprintf(buf, sizeof buf, "  %-16s %-30s %-12s %-10s %10s\n", "name", "shape", "material", "motion", "mass (g)");
+  os << buf;
+  for (const auto& b : s.bodies) {
+    std::string mat = b.material >= 0 ? s.materials[b.material].name : "-";
+    if (!b.parts.empty()) {
+      mat.append("+").append(std::to_string(b.parts.size())).append(b.parts.size() == 1 ? " part" : " parts");
+    }
+    std::snprintf(buf, sizeof buf, "  %-16s %-30s %-12s %-10s %10.4g\n", b.name.c_str(), b.shape.describe().c_str(),
+                  mat.c_str(), motion_name(b.motion), b.mass * 1e3);
+    os << buf;
+  }
+  os << "outputs  cache " << (s.cache ? *s.cache : "(none)");
+  if (s.field) os << "; field " << s.field->path;
+  if (s.preview) os << "; preview " << s.preview->path << " " << s.preview->width << "x" << s.preview->height;
+  os << "\n";
+  return os.str();
+}
+
+}  // namespace magbake::cli

@@ -1,0 +1,41 @@
+// Shared pieces of the magbake commands: exit codes, scene loading with diagnostics, output.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+
+#include "scene/load.h"
+
+namespace magbake::cli {
+
+/// Process exit codes (DESIGN.md).
+enum Exit : int { kOk = 0, kFailure = 1, kUsage = 2, kInterrupted = 75 };
+
+/// Options every command shares.
+struct Global {
+  int threads = 0;  ///< 0 = all cores
+  bool quiet = false;
+  bool verbose = false;
+};
+
+/// Loads a scene, or prints every problem (file:line:col) to stderr and returns nullopt.
+std::optional<scene::Scene> load_or_report(const std::string& path);
+
+/// A 3-vector as a JSON array.
+nlohmann::json json_vec(const Eigen::Vector3d& v);
+
+/// Writes JSON to stdout (pretty, one trailing newline).
+void print_json(const nlohmann::json& j);
+
+/// A human-readable one-screen summary of a scene (used by check and info).
+std::string scene_summary(const scene::Scene& s);
+
+int cmd_check(const std::string& path, const Global& g);
+int cmd_info(const std::string& path, const Global& g);
+int cmd_eval(const std::string& path, double time, bool json, const Global& g);
+int cmd_probe(const std::string& path, const std::vector<std::string>& at, const std::string& points_file, double time,
+              bool json, const Global& g);
+
+}  // namespace magbake::cli

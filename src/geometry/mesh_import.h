@@ -1,0 +1,19 @@
+// Loading triangle meshes from files (OBJ, STL, PLY, glTF and the other formats assimp reads).
+#pragma once
+
+#include <string>
+
+#include "shapes.h"
+
+namespace magbake::geometry {
+
+/// Vertices and triangles of every mesh in a file, concatenated, coordinates multiplied by
+/// `scale`. Throws std::runtime_error with the reason when the file cannot be read or has no
+/// triangles.
+struct TriangleSoup {
+  std::vector<Vec3> vertices;
+  std::vector<Eigen::Vector3i> triangles;
+};
+TriangleSoup load_triangles(const std::string& path, double scale);
+
+}  // namespace magbake::geometry

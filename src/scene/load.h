@@ -1,0 +1,25 @@
+// Scene files: parse (YAML -> SceneSpec), validate (-> Scene), or both.
+#pragma once
+
+#include <string>
+
+#include "diagnostics.h"
+#include "scene.h"
+#include "spec.h"
+
+namespace magbake::scene {
+
+/// Checks a SceneSpec and builds the Scene (SI units, presets resolved, meshes loaded relative
+/// to the scene file's folder, mass properties computed). Problems go to `diag`; the returned
+/// Scene is only meaningful when `diag` stays empty.
+Scene validate_scene(const SceneSpec& spec, Diagnostics& diag);
+
+/// parse + validate; throws SceneError listing every problem.
+Scene load_scene(const std::string& path);
+/// The same from text already in memory (`file` names it in messages and anchors mesh paths).
+Scene load_scene_text(const std::string& text, const std::string& file);
+
+/// Hex SHA-256 of a byte string.
+std::string sha256_hex(const std::string& bytes);
+
+}  // namespace magbake::scene

@@ -1,0 +1,142 @@
+// Scene: a validated scene, immutable, in SI units (m, kg, s, rad, T). Built once by
+// load_scene(); everything that changes during a bake lives elsewhere (sim::SimState).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "geometry/shapes.h"
+#include "magnetics/material.h"
+#include "magnetics/types.h"
+
+namespace magbake::scene {
+
+using magnetics::Mat3;
+using magnetics::Pose;
+using magnetics::Quat;
+using magnetics::Vec3;
+
+/// A named material (scene `materials:`).
+struct Material {
+  std::string name;
+  magnetics::MaterialKind kind = magnetics::MaterialKind::kNone;
+  std::string kind_name;          ///< as written: permanent | soft | linear | superconductor | none
+  double remanence = 0;           ///< T (permanent)
+  double chi = 0;                 ///< susceptibility (soft, linear; -1 for superconductor)
+  std::optional<double> density;  ///< kg/m³
+};
+
+/// A solid shape as the scene describes it, with the built geometry.
+struct ShapeDesc {
+  geometry::ShapeKind kind = geometry::ShapeKind::kBox;
+  Vec3 size = Vec3::Zero();       ///< box full edges, m
+  double radius = 0, height = 0;  ///< sphere, cylinder, m
+  double major = 0, minor = 0;    ///< torus, m
+  std::string mesh_file;          ///< mesh: resolved path
+  double mesh_scale = 1;          ///< mesh: file coordinates x scale x length unit -> m
+  std::shared_ptr<const geometry::Shape> shape;  ///< centred as the file describes it
+  std::string describe() const;   ///< e.g. "cylinder r=5 mm h=40 mm"
+};
+
+/// A magnetic insert of a body, in the body frame.
+struct Part {
+  ShapeDesc shape;
+  Pose pose;                       ///< part frame -> body frame (body origin as written)
+  int material = -1;               ///< index into Scene::materials
+  Vec3 magnetization = Vec3::Zero();  ///< unit direction, body frame (permanent only)
+};
+
+/// A keyframe of a kinematic body.
+struct Key {
+  double t = 0;                    ///< s
+  std::optional<Vec3> position;    ///< body origin, world, m
+  std::optional<Quat> orientation; ///< body -> world
+};
+
+enum class Motion { kDynamic, kStatic, kKinematic };
+
+/// A rigid body.
+struct Body {
+  std::string name;
+  ShapeDesc shape;
+  int material = -1;                  ///< index into Scene::materials
+  Vec3 magnetization = Vec3::Zero();  ///< unit, body frame (permanent material only)
+  std::vector<Part> parts;
+  Pose pose;                          ///< initial pose of the body origin (as written), world
+  Motion motion = Motion::kDynamic;
+  std::vector<Key> keys;              ///< kinematic only, increasing t
+  double mass = 0;                    ///< kg (0 for static/kinematic without density)
+  Vec3 com = Vec3::Zero();            ///< centre of mass in the body frame, m
+  Mat3 inertia = Mat3::Zero();        ///< about the centre of mass, body axes, kg·m²
+  double friction = 0.5, restitution = 0.1;
+  Vec3 velocity = Vec3::Zero();       ///< initial linear velocity of the centre of mass, m/s
+  Vec3 angular_velocity = Vec3::Zero();  ///< initial, world, rad/s
+
+  /// Pose of the body origin at time t: keyed for kinematic bodies (linear position, slerp
+  /// orientation, held before the first and after the last key), the initial pose otherwise.
+  Pose pose_at(double t) const;
+  /// Pose of the centre-of-mass frame (body axes, origin at the centre of mass).
+  Pose com_pose(const Pose& origin_pose) const {
+    return Pose{origin_pose.rotation, origin_pose.position + origin_pose.rotation * com};
+  }
+  bool magnetic(const std::vector<Material>& materials) const;
+};
+
+/// Magnetics settings after presets are resolved.
+struct MagneticsSettings {
+  std::string quality = "default";   ///< draft | default | high
+  std::optional<double> cell_size;   ///< m; when unset each part uses its extent / cells_per_extent
+  int cells_per_extent = 4;          ///< preset: cells across the smallest extent of each part
+  double theta = 0.5;
+  std::string induction = "coupled";  ///< coupled | paper | off
+  Vec3 external_field = Vec3::Zero();  ///< T
+  double near_field = 2.5;           ///< cell sizes (exact cuboid interactions within)
+  int near_field_order = 4;
+};
+
+struct FieldOutput {
+  std::string path;                  ///< pattern with #### or printf %04d
+  std::optional<double> voxel;       ///< m; default: automatic from the bounds
+  bool auto_bounds = true;
+  Vec3 bounds_min = Vec3::Zero(), bounds_max = Vec3::Zero();  ///< m, world
+  double margin = 0.02;              ///< m, added around the magnetic bodies (auto bounds)
+  int every = 1;                     ///< write every n-th frame
+};
+
+struct Camera {
+  Vec3 position, look_at;            ///< m, world
+  double fov = 0.6981317007977318;   ///< vertical field of view, rad (40 degrees)
+};
+
+struct PreviewOutput {
+  std::string path;
+  int width = 960, height = 540;
+  std::optional<Camera> camera;
+  bool field_lines = false;
+};
+
+struct Scene {
+  std::string file;        ///< the scene file path
+  std::string text;        ///< its exact bytes (stored in caches)
+  std::string hash;        ///< SHA-256 of text, hex
+  std::string name;
+  std::string length_unit, angle_unit;
+  double fps = 30;
+  int first_frame = 1, last_frame = 120;
+  double dt = 1.0 / 600.0;  ///< physics substep, s
+  Vec3 gravity{0, 0, -9.81};
+  MagneticsSettings magnetics;
+  std::vector<Material> materials;
+  std::vector<Body> bodies;
+  std::optional<std::string> cache;     ///< as written (relative to the working directory)
+  std::optional<FieldOutput> field;
+  std::optional<PreviewOutput> preview;
+
+  /// Time (s) of a frame: (f - first) / fps.
+  double frame_time(int f) const { return (f - first_frame) / fps; }
+  int body_index(const std::string& name) const;
+};
+
+}  // namespace magbake::scene

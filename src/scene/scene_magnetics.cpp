@@ -1,0 +1,58 @@
+#include "scene_magnetics.h"
+
+namespace magbake::scene {
+
+magnetics::Settings magnetics_settings(const Scene& sc) {
+  magnetics::Settings st;
+  st.theta = sc.magnetics.theta;
+  st.induction = sc.magnetics.induction == "off"     ? magnetics::InductionMode::kOff
+                 : sc.magnetics.induction == "paper" ? magnetics::InductionMode::kPaper
+                                                     : magnetics::InductionMode::kCoupled;
+  st.external_field = sc.magnetics.external_field;
+  st.near_field = sc.magnetics.near_field;
+  st.near_field_order = sc.magnetics.near_field_order;
+  return st;
+}
+
+double part_cell_size(const Scene& sc, const ShapeDesc& shape) {
+  if (sc.magnetics.cell_size) return *sc.magnetics.cell_size;
+  return shape.shape->bounds().sizes().minCoeff() / sc.magnetics.cells_per_extent;
+}
+
+magnetics::Model build_magnetics_model(const Scene& sc) {
+  std::vector<magnetics::BodySpec> bodies(sc.bodies.size());
+  for (std::size_t i = 0; i < sc.bodies.size(); ++i) {
+    const Body& b = sc.bodies[i];
+    // Cells live in the centre-of-mass frame: shift every part by -com.
+    auto add = [&](const ShapeDesc& shape, const Pose& part_pose, int mat, const Vec3& magnetization) {
+      if (mat < 0 || !shape.shape) return;
+      const Material& m = sc.materials[mat];
+      if (m.kind == magnetics::MaterialKind::kNone) return;
+      magnetics::PartSpec p;
+      p.solid = shape.shape.get();
+      p.part_to_body = Pose{part_pose.rotation, part_pose.position - b.com};
+      p.material.kind = m.kind;
+      p.material.remanence = m.remanence;
+      p.material.chi = m.chi;
+      // The scene gives magnetization in the body frame; the library wants the part frame.
+      if (m.kind == magnetics::MaterialKind::kPermanent) p.material.direction = part_pose.rotation.conjugate() * magnetization;
+      p.cell_size = part_cell_size(sc, shape);
+      bodies[i].parts.push_back(p);
+    };
+    add(b.shape, Pose{}, b.material, b.magnetization);
+    for (const Part& p : b.parts) add(p.shape, p.pose, p.material, p.magnetization);
+  }
+  magnetics::BuildSettings bs;
+  bs.cell_size = sc.magnetics.cell_size.value_or(0.001);
+  return magnetics::build_model(bodies, bs);
+}
+
+void set_poses_at(const Scene& sc, double t, magnetics::State& s) {
+  s.body_pose.resize(sc.bodies.size());
+  for (std::size_t i = 0; i < sc.bodies.size(); ++i) {
+    const Body& b = sc.bodies[i];
+    s.body_pose[i] = b.com_pose(b.pose_at(t));
+  }
+}
+
+}  // namespace magbake::scene

@@ -1,0 +1,26 @@
+// The magnetics library's view of a Scene: one model body per scene body, cells in each body's
+// centre-of-mass frame, library settings from the scene's magnetics section.
+#pragma once
+
+#include <vector>
+
+#include "magnetics/system.h"
+#include "scene.h"
+
+namespace magbake::scene {
+
+/// Library settings from the scene (presets already resolved in the Scene).
+magnetics::Settings magnetics_settings(const Scene& scene);
+
+/// Cell size a part gets: magnetics.cell_size if set, else the part's smallest extent divided
+/// by the preset's cells_per_extent. m.
+double part_cell_size(const Scene& scene, const ShapeDesc& shape);
+
+/// Builds the magnetics model of a scene (throws std::runtime_error on capacity limits).
+magnetics::Model build_magnetics_model(const Scene& scene);
+
+/// Sets state.body_pose to every body's centre-of-mass frame at time t (kinematic bodies at
+/// their keyed pose, the others at their initial pose).
+void set_poses_at(const Scene& scene, double t, magnetics::State& state);
+
+}  // namespace magbake::scene

@@ -1,0 +1,506 @@
+// SceneSpec -> Scene: every semantic check, unit conversion and preset resolution.
+#include <openssl/evp.h>
+
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <set>
+
+#include "geometry/mesh_import.h"
+#include "load.h"
+
+namespace magbake::scene {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+struct Ctx {
+  Diagnostics& d;
+  double L = 1;  // file length unit -> m
+  double A = 1;  // file angle unit -> rad
+  std::filesystem::path dir;
+};
+
+bool positive(Ctx& c, const Val<double>& v, const std::string& path, const char* what = "length") {
+  if (!v.set) return false;
+  if (!(v.v > 0) || !std::isfinite(v.v)) {
+    c.d.add(v.loc, path, std::string("must be a positive ") + what + ", got " + std::to_string(v.v));
+    return false;
+  }
+  return true;
+}
+
+Vec3 vec3(const Val<Vec>& v, double scale = 1) { return Vec3(v.v[0], v.v[1], v.v[2]) * scale; }
+
+std::optional<Quat> orientation(Ctx& c, const OrientationSpec& o, const std::string& path) {
+  if (!o.set) return std::nullopt;
+  if (o.quat.set) {
+    const Eigen::Vector4d q(o.quat.v[0], o.quat.v[1], o.quat.v[2], o.quat.v[3]);
+    const double n = q.norm();
+    if (n == 0) {
+      c.d.add(o.quat.loc, path + ".orientation.quat", "zero quaternion: give a unit quaternion [w, x, y, z]");
+      return std::nullopt;
+    }
+    if (std::abs(n - 1) > 1e-6) {
+      c.d.add(o.quat.loc, path + ".orientation.quat",
+              "not a unit quaternion (norm " + std::to_string(n) + "): give [w, x, y, z] with w²+x²+y²+z² = 1");
+      return std::nullopt;
+    }
+    return Quat(q[0], q[1], q[2], q[3]).normalized();
+  }
+  if (o.axis.set && o.angle.set) {
+    const Vec3 axis = vec3(o.axis);
+    if (axis.norm() == 0) {
+      c.d.add(o.axis.loc, path + ".orientation.axis", "zero rotation axis");
+      return std::nullopt;
+    }
+    return Quat(Eigen::AngleAxisd(o.angle.v * c.A, axis.normalized()));
+  }
+  return std::nullopt;
+}
+
+std::optional<Vec3> direction(Ctx& c, const Val<Vec>& v, const std::string& path) {
+  if (!v.set) return std::nullopt;
+  const Vec3 x = vec3(v);
+  if (x.norm() == 0) {
+    c.d.add(v.loc, path, "zero vector: give a direction");
+    return std::nullopt;
+  }
+  return x.normalized();
+}
+
+ShapeDesc shape(Ctx& c, const ShapeSpec& s, const std::string& path) {
+  ShapeDesc out;
+  const std::string kp = path + "." + s.kind;
+  if (s.kind == "box") {
+    out.kind = geometry::ShapeKind::kBox;
+    if (!s.size.set) return out;
+    for (double x : s.size.v) {
+      if (!(x > 0)) {
+        c.d.add(s.size.loc, kp, "box edges must be positive lengths");
+        return out;
+      }
+    }
+    out.size = vec3(s.size, c.L);
+    out.shape = std::make_shared<geometry::BoxShape>(out.size);
+  } else if (s.kind == "sphere") {
+    out.kind = geometry::ShapeKind::kSphere;
+    if (!positive(c, s.radius, kp + ".radius")) return out;
+    out.radius = s.radius.v * c.L;
+    out.shape = std::make_shared<geometry::SphereShape>(out.radius);
+  } else if (s.kind == "cylinder") {
+    out.kind = geometry::ShapeKind::kCylinder;
+    const bool ok = positive(c, s.radius, kp + ".radius") & positive(c, s.height, kp + ".height");
+    if (!ok) return out;
+    out.radius = s.radius.v * c.L, out.height = s.height.v * c.L;
+    out.shape = std::make_shared<geometry::CylinderShape>(out.radius, out.height);
+  } else if (s.kind == "torus") {
+    out.kind = geometry::ShapeKind::kTorus;
+    const bool ok = positive(c, s.major, kp + ".major") & positive(c, s.minor, kp + ".minor");
+    if (!ok) return out;
+    if (s.minor.v >= s.major.v) {
+      c.d.add(s.minor.loc, kp + ".minor", "the tube radius (minor) must be smaller than the major radius");
+      return out;
+    }
+    out.major = s.major.v * c.L, out.minor = s.minor.v * c.L;
+    out.shape = std::make_shared<geometry::TorusShape>(out.major, out.minor);
+  } else if (s.kind == "mesh") {
+    out.kind = geometry::ShapeKind::kMesh;
+    if (!s.file.set) return out;
+    double scale = 1;
+    if (s.scale.set) {
+      if (!positive(c, s.scale, kp + ".scale", "number")) return out;
+      scale = s.scale.v;
+    }
+    const std::filesystem::path file =
+        std::filesystem::path(s.file.v).is_absolute() ? std::filesystem::path(s.file.v) : c.dir / s.file.v;
+    out.mesh_file = file.lexically_normal().string();
+    out.mesh_scale = scale;
+    try {
+      geometry::TriangleSoup soup = geometry::load_triangles(out.mesh_file, scale * c.L);
+      out.shape = std::make_shared<geometry::MeshShape>(std::move(soup.vertices), std::move(soup.triangles));
+    } catch (const std::exception& e) {
+      c.d.add(s.file.loc, kp + ".file", e.what());
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string ShapeDesc::describe() const {
+  char buf[256];
+  switch (kind) {
+    case geometry::ShapeKind::kBox:
+      std::snprintf(buf, sizeof buf, "box %g x %g x %g mm", size[0] * 1e3, size[1] * 1e3, size[2] * 1e3);
+      break;
+    case geometry::ShapeKind::kSphere: std::snprintf(buf, sizeof buf, "sphere r=%g mm", radius * 1e3); break;
+    case geometry::ShapeKind::kCylinder:
+      std::snprintf(buf, sizeof buf, "cylinder r=%g mm h=%g mm", radius * 1e3, height * 1e3);
+      break;
+    case geometry::ShapeKind::kTorus:
+      std::snprintf(buf, sizeof buf, "torus R=%g mm r=%g mm", major * 1e3, minor * 1e3);
+      break;
+    case geometry::ShapeKind::kMesh:
+      std::snprintf(buf, sizeof buf, "mesh %s (%zu triangles)", std::filesystem::path(mesh_file).filename().c_str(),
+                    shape ? static_cast<const geometry::MeshShape&>(*shape).triangles().size() : 0);
+      break;
+  }
+  return buf;
+}
+
+namespace {
+// Interpolates the keys that set a quantity (linear / slerp), holding it outside them.
+template <class T, class Has, class Get, class Mix>
+void interpolate(const std::vector<Key>& keys, double t, Has has, Get get, Mix mix, T& out) {
+  const Key* prev = nullptr;
+  for (const Key& k : keys) {
+    if (!has(k)) continue;
+    if (k.t >= t) {  // the first key at or after t
+      out = prev ? mix(get(*prev), get(k), (t - prev->t) / (k.t - prev->t)) : get(k);
+      return;
+    }
+    prev = &k;
+  }
+  if (prev) out = get(*prev);
+}
+}  // namespace
+
+Pose Body::pose_at(double t) const {
+  if (motion != Motion::kKinematic || keys.empty()) return pose;
+  Pose p = pose;
+  interpolate(keys, t, [](const Key& k) { return k.position.has_value(); }, [](const Key& k) { return *k.position; },
+              [](const Vec3& a, const Vec3& b, double s) { return Vec3((1 - s) * a + s * b); }, p.position);
+  interpolate(keys, t, [](const Key& k) { return k.orientation.has_value(); },
+              [](const Key& k) { return *k.orientation; },
+              [](const Quat& a, const Quat& b, double s) { return a.slerp(s, b); }, p.rotation);
+  return p;
+}
+
+bool Body::magnetic(const std::vector<Material>& m) const {
+  if (material >= 0 && m[material].kind != magnetics::MaterialKind::kNone) return true;
+  for (const Part& p : parts) {
+    if (p.material >= 0 && m[p.material].kind != magnetics::MaterialKind::kNone) return true;
+  }
+  return false;
+}
+
+int Scene::body_index(const std::string& n) const {
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    if (bodies[i].name == n) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+std::string sha256_hex(const std::string& bytes) {
+  unsigned char md[EVP_MAX_MD_SIZE];
+  unsigned int len = 0;
+  EVP_Digest(bytes.data(), bytes.size(), md, &len, EVP_sha256(), nullptr);
+  static const char* hex = "0123456789abcdef";
+  std::string out;
+  for (unsigned i = 0; i < len; ++i) out += hex[md[i] >> 4], out += hex[md[i] & 15];
+  return out;
+}
+
+Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
+  Scene sc;
+  sc.file = s.file;
+  sc.text = s.text;
+  sc.hash = sha256_hex(s.text);
+  Ctx c{d, 1, 1, std::filesystem::path(s.file).parent_path()};
+
+  // Version and units first: everything else depends on them.
+  if (s.version.set && s.version.v != 1) {
+    d.add(s.version.loc, "magbake",
+          "unsupported scene format version " + std::to_string(s.version.v).substr(0, 6) + "; this magbake reads version 1");
+  }
+  if (s.length_unit.set) {
+    sc.length_unit = s.length_unit.v;
+    if (s.length_unit.v == "m") c.L = 1;
+    else if (s.length_unit.v == "cm") c.L = 0.01;
+    else if (s.length_unit.v == "mm") c.L = 0.001;
+    else d.add(s.length_unit.loc, "units.length", "expected m, cm or mm, got '" + s.length_unit.v + "'");
+  }
+  if (s.angle_unit.set) {
+    sc.angle_unit = s.angle_unit.v;
+    if (s.angle_unit.v == "deg") c.A = kPi / 180;
+    else if (s.angle_unit.v == "rad") c.A = 1;
+    else d.add(s.angle_unit.loc, "units.angle", "expected deg or rad, got '" + s.angle_unit.v + "'");
+  }
+  sc.name = s.name.set ? s.name.v : std::filesystem::path(s.file).stem().string();
+
+  // Time.
+  if (s.fps.set && positive(c, s.fps, "time.fps", "frame rate")) sc.fps = s.fps.v;
+  if (s.frames.set) {
+    const double a = s.frames.v[0], b = s.frames.v[1];
+    if (a != std::floor(a) || b != std::floor(b)) {
+      d.add(s.frames.loc, "time.frames", "frame numbers must be integers");
+    } else if (b < a) {
+      d.add(s.frames.loc, "time.frames",
+            "frame range reversed: [" + std::to_string(int(a)) + ", " + std::to_string(int(b)) + "]; give [first, last]");
+    } else {
+      sc.first_frame = int(a), sc.last_frame = int(b);
+    }
+  }
+  sc.dt = std::min(1.0 / 600.0, 1.0 / sc.fps);
+  if (s.dt.set) {
+    if (!(s.dt.v > 0)) {
+      d.add(s.dt.loc, "time.dt", "the physics substep must be positive, got " + std::to_string(s.dt.v));
+    } else if (s.dt.v > 1.0 / sc.fps + 1e-15) {
+      d.add(s.dt.loc, "time.dt", "the physics substep must not exceed the frame interval 1/fps");
+    } else {
+      sc.dt = s.dt.v;
+    }
+  }
+  if (s.gravity.set) sc.gravity = vec3(s.gravity, c.L);
+
+  // Magnetics settings and presets.
+  auto& mg = sc.magnetics;
+  if (s.quality.set) {
+    mg.quality = s.quality.v;
+    if (mg.quality == "draft") mg.cells_per_extent = 2, mg.theta = 0.7, mg.near_field = 1.5, mg.near_field_order = 3;
+    else if (mg.quality == "default") mg.cells_per_extent = 4, mg.theta = 0.5, mg.near_field = 2.5, mg.near_field_order = 4;
+    else if (mg.quality == "high") mg.cells_per_extent = 8, mg.theta = 0.3, mg.near_field = 4.0, mg.near_field_order = 6;
+    else d.add(s.quality.loc, "magnetics.quality", "expected draft, default or high, got '" + mg.quality + "'");
+  }
+  if (s.cell_size.set && positive(c, s.cell_size, "magnetics.cell_size")) mg.cell_size = s.cell_size.v * c.L;
+  if (s.theta.set) {
+    if (!(s.theta.v >= 0 && s.theta.v <= 1)) d.add(s.theta.loc, "magnetics.theta", "must be in [0, 1]");
+    else mg.theta = s.theta.v;
+  }
+  if (s.induction.set) {
+    if (s.induction.v != "coupled" && s.induction.v != "paper" && s.induction.v != "off") {
+      d.add(s.induction.loc, "magnetics.induction", "expected coupled, paper or off, got '" + s.induction.v + "'");
+    } else {
+      mg.induction = s.induction.v;
+    }
+  }
+  if (s.external_field.set) mg.external_field = vec3(s.external_field);
+
+  // Materials.
+  std::vector<std::string> material_names;
+  for (const MaterialSpecS& ms : s.materials) {
+    if (std::find(material_names.begin(), material_names.end(), ms.name) != material_names.end()) continue;
+    Material m;
+    m.name = ms.name;
+    const std::string mp = "materials." + ms.name;
+    if (ms.kind.set) {
+      m.kind_name = ms.kind.v;
+      if (ms.kind.v == "permanent") {
+        m.kind = magnetics::MaterialKind::kPermanent;
+        if (!ms.remanence.set) d.add(ms.loc, mp, "a permanent material needs its remanence (tesla)");
+        else if (positive(c, ms.remanence, mp + ".remanence", "remanence in tesla")) m.remanence = ms.remanence.v;
+      } else if (ms.kind.v == "soft" || ms.kind.v == "linear") {
+        m.kind = magnetics::MaterialKind::kLinear;
+        if (!ms.chi.set) {
+          d.add(ms.loc, mp, "a " + ms.kind.v + " material needs its susceptibility chi");
+        } else if (!(ms.chi.v > -1)) {
+          d.add(ms.chi.loc, mp + ".chi", "chi must be greater than -1 (use kind: superconductor for chi = -1)");
+        } else {
+          m.chi = ms.chi.v;
+        }
+      } else if (ms.kind.v == "superconductor") {
+        m.kind = magnetics::MaterialKind::kSuperconductor;
+        m.chi = -1;
+      } else if (ms.kind.v == "none") {
+        m.kind = magnetics::MaterialKind::kNone;
+      } else {
+        const std::string guess = did_you_mean(ms.kind.v, {"permanent", "soft", "linear", "superconductor", "none"});
+        d.add(ms.kind.loc, mp + ".kind",
+              "unknown material kind '" + ms.kind.v + "'" + (guess.empty() ? "" : " (did you mean '" + guess + "'?)"));
+      }
+      if (ms.remanence.set && m.kind != magnetics::MaterialKind::kPermanent) {
+        d.add(ms.remanence.loc, mp + ".remanence", "only permanent materials have a remanence");
+      }
+      if (ms.chi.set && m.kind != magnetics::MaterialKind::kLinear) {
+        d.add(ms.chi.loc, mp + ".chi", "only soft and linear materials have a susceptibility");
+      }
+    }
+    if (ms.density.set && positive(c, ms.density, mp + ".density", "density in kg/m³")) m.density = ms.density.v;
+    material_names.push_back(m.name);
+    sc.materials.push_back(m);
+  }
+  auto find_material = [&](const Val<std::string>& v, const std::string& path) {
+    if (!v.set) return -1;
+    for (std::size_t i = 0; i < sc.materials.size(); ++i) {
+      if (sc.materials[i].name == v.v) return static_cast<int>(i);
+    }
+    const std::string guess = did_you_mean(v.v, material_names);
+    d.add(v.loc, path, "unknown material '" + v.v + "'" + (guess.empty() ? "" : " (did you mean '" + guess + "'?)"));
+    return -1;
+  };
+  auto check_magnetization = [&](int mat, const Val<Vec>& v, Loc where, const std::string& path, Vec3& out) {
+    if (mat < 0) return;
+    const bool permanent = sc.materials[mat].kind == magnetics::MaterialKind::kPermanent;
+    if (permanent && !v.set) {
+      d.add(where, path, "permanent material '" + sc.materials[mat].name +
+                             "' needs a magnetization direction: add magnetization: [x, y, z] (body frame)");
+    } else if (!permanent && v.set) {
+      d.add(v.loc, path + ".magnetization", "only permanent materials have a magnetization direction");
+    } else if (permanent) {
+      if (auto dir = direction(c, v, path + ".magnetization")) out = *dir;
+    }
+  };
+
+  // Bodies.
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    const BodySpecS& bs = s.bodies[i];
+    const std::string bp = "bodies[" + std::to_string(i) + "]";
+    Body b;
+    if (bs.name.set) {
+      b.name = bs.name.v;
+      if (!names.insert(b.name).second) d.add(bs.name.loc, bp + ".name", "two bodies are named '" + b.name + "'");
+    }
+    if (!bs.shape.kind.empty()) b.shape = shape(c, bs.shape, bp + ".shape");
+    b.material = find_material(bs.material, bp + ".material");
+    check_magnetization(b.material, bs.magnetization, bs.loc, bp, b.magnetization);
+    if (bs.position.set) b.pose.position = vec3(bs.position, c.L);
+    if (auto q = orientation(c, bs.orientation, bp)) b.pose.rotation = *q;
+    if (bs.motion.set) {
+      if (bs.motion.v == "dynamic") b.motion = Motion::kDynamic;
+      else if (bs.motion.v == "static") b.motion = Motion::kStatic;
+      else if (bs.motion.v == "kinematic") b.motion = Motion::kKinematic;
+      else d.add(bs.motion.loc, bp + ".motion", "expected dynamic, static or kinematic, got '" + bs.motion.v + "'");
+    }
+    if (bs.friction.set) {
+      if (!(bs.friction.v >= 0)) d.add(bs.friction.loc, bp + ".friction", "must be >= 0");
+      else b.friction = bs.friction.v;
+    }
+    if (bs.restitution.set) {
+      if (!(bs.restitution.v >= 0 && bs.restitution.v <= 1)) d.add(bs.restitution.loc, bp + ".restitution", "must be in [0, 1]");
+      else b.restitution = bs.restitution.v;
+    }
+    if (bs.velocity.set) b.velocity = vec3(bs.velocity, c.L);
+    if (bs.angular_velocity.set) b.angular_velocity = vec3(bs.angular_velocity, c.A);
+    // Keys.
+    if (!bs.keys.empty() && b.motion != Motion::kKinematic) {
+      d.add(bs.keys_loc, bp + ".keys", "only kinematic bodies have keys (add motion: kinematic)");
+    }
+    double last_t = -std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < bs.keys.size(); ++k) {
+      const KeySpec& ks = bs.keys[k];
+      const std::string kp = bp + ".keys[" + std::to_string(k) + "]";
+      if (!ks.t.set) continue;
+      if (!(ks.t.v > last_t)) {
+        d.add(ks.t.loc, kp + ".t", "keys out of time order: t = " + std::to_string(ks.t.v) +
+                                       " does not come after the previous key's t = " + std::to_string(last_t));
+      }
+      last_t = ks.t.v;
+      Key key;
+      key.t = ks.t.v;
+      if (ks.position.set) key.position = vec3(ks.position, c.L);
+      key.orientation = orientation(c, ks.orientation, kp);
+      b.keys.push_back(key);
+    }
+    // Parts.
+    for (std::size_t j = 0; j < bs.parts.size(); ++j) {
+      const PartSpecS& ps = bs.parts[j];
+      const std::string pp = bp + ".parts[" + std::to_string(j) + "]";
+      Part p;
+      if (!ps.shape.kind.empty()) p.shape = shape(c, ps.shape, pp + ".shape");
+      if (ps.position.set) p.pose.position = vec3(ps.position, c.L);
+      if (auto q = orientation(c, ps.orientation, pp)) p.pose.rotation = *q;
+      p.material = find_material(ps.material, pp + ".material");
+      check_magnetization(p.material, ps.magnetization, ps.loc, pp, p.magnetization);
+      b.parts.push_back(std::move(p));
+    }
+    // Mass: the body's own shape with the body's mass or density, else the material's density.
+    if (bs.density.set && bs.mass.set) d.add(bs.mass.loc, bp, "give density or mass, not both");
+    if (b.shape.shape) {
+      const geometry::MassProperties mp = b.shape.shape->mass_properties();
+      std::optional<double> density;
+      if (bs.density.set && positive(c, bs.density, bp + ".density", "density in kg/m³")) density = bs.density.v;
+      if (bs.mass.set && positive(c, bs.mass, bp + ".mass", "mass in kg")) density = bs.mass.v / mp.volume;
+      if (!density && b.material >= 0) density = sc.materials[b.material].density;
+      if (density) {
+        b.mass = *density * mp.volume;
+        b.inertia = *density * mp.inertia;
+      } else if (b.motion == Motion::kDynamic) {
+        d.add(bs.loc, bp, "a dynamic body needs a mass: give mass, density, or a density for its material");
+      }
+      b.com = mp.centroid;
+    }
+    sc.bodies.push_back(std::move(b));
+  }
+
+  // Outputs.
+  if (s.cache.set) sc.cache = s.cache.v;
+  if (s.field_set) {
+    FieldOutput f;
+    f.path = s.field_path.v;
+    if (s.field_voxel.set && positive(c, s.field_voxel, "outputs.field.voxel")) f.voxel = s.field_voxel.v * c.L;
+    if (s.field_margin.set) {
+      if (!(s.field_margin.v >= 0)) d.add(s.field_margin.loc, "outputs.field.margin", "must be >= 0");
+      else f.margin = s.field_margin.v * c.L;
+    }
+    if (s.field_every.set) {
+      if (!(s.field_every.v >= 1) || s.field_every.v != std::floor(s.field_every.v)) {
+        d.add(s.field_every.loc, "outputs.field.every", "must be a whole number >= 1");
+      } else {
+        f.every = int(s.field_every.v);
+      }
+    }
+    if (s.field_bounds_auto.set && s.field_bounds_auto.v != "auto") {
+      d.add(s.field_bounds_auto.loc, "outputs.field.bounds", "expected 'auto' or [[xmin, ymin, zmin], [xmax, ymax, zmax]]");
+    }
+    if (s.field_bounds.set) {
+      f.auto_bounds = false;
+      f.bounds_min = Vec3(s.field_bounds.v[0][0], s.field_bounds.v[0][1], s.field_bounds.v[0][2]) * c.L;
+      f.bounds_max = Vec3(s.field_bounds.v[1][0], s.field_bounds.v[1][1], s.field_bounds.v[1][2]) * c.L;
+      if (!(f.bounds_min.array() < f.bounds_max.array()).all()) {
+        d.add(s.field_bounds.loc, "outputs.field.bounds", "every minimum must be below its maximum");
+      }
+    }
+    sc.field = f;
+  }
+  if (s.preview_set) {
+    PreviewOutput p;
+    p.path = s.preview_path.v;
+    if (s.preview_size.set) {
+      const double w = s.preview_size.v[0], h = s.preview_size.v[1];
+      if (!(w >= 16 && h >= 16 && w <= 16384 && h <= 16384) || w != std::floor(w) || h != std::floor(h)) {
+        d.add(s.preview_size.loc, "outputs.preview.size", "expected [width, height] in pixels, 16 to 16384");
+      } else {
+        p.width = int(w), p.height = int(h);
+      }
+    }
+    if (s.field_lines.set) p.field_lines = s.field_lines.v;
+    if (s.camera.set && s.camera.position.set && s.camera.look_at.set) {
+      Camera cam;
+      cam.position = vec3(s.camera.position, c.L);
+      cam.look_at = vec3(s.camera.look_at, c.L);
+      if (s.camera.fov.set) {
+        const double fov = s.camera.fov.v * c.A;
+        if (!(fov > 0 && fov < kPi)) d.add(s.camera.fov.loc, "outputs.preview.camera.fov", "must be between 0 and 180 degrees");
+        else cam.fov = fov;
+      }
+      if ((cam.position - cam.look_at).norm() == 0) {
+        d.add(s.camera.loc, "outputs.preview.camera", "position and look_at must differ");
+      }
+      p.camera = cam;
+    }
+    sc.preview = p;
+  }
+  return sc;
+}
+
+Scene load_scene_text(const std::string& text, const std::string& file) {
+  Diagnostics d(file);
+  const SceneSpec spec = parse_scene_text(text, file, d);
+  if (!d.empty()) throw SceneError(d);
+  Scene s = validate_scene(spec, d);
+  if (!d.empty()) throw SceneError(d);
+  return s;
+}
+
+Scene load_scene(const std::string& path) {
+  Diagnostics d(path);
+  const SceneSpec spec = parse_scene_file(path, d);
+  if (!d.empty()) throw SceneError(d);
+  Scene s = validate_scene(spec, d);
+  if (!d.empty()) throw SceneError(d);
+  return s;
+}
+
+}  // namespace magbake::scene

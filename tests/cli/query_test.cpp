@@ -1,0 +1,198 @@
+// The magbake binary's query commands (check, eval, probe, info) through real scene files,
+// against the closed forms the library tests use.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+
+#include <Eigen/Geometry>
+
+#include "support/closed_forms.h"
+
+using Quat = Eigen::Quaterniond;
+
+namespace magbake::testing {
+namespace {
+
+struct Outcome {
+  int code = -1;
+  std::string out;
+};
+
+// Runs magbake with `args` (stderr discarded unless asked), returns exit code and stdout.
+Outcome magbake(const std::string& args, bool keep_stderr = false) {
+  const std::string cmd = std::string(MAGBAKE_EXE) + " " + args + (keep_stderr ? " 2>&1" : " 2>/dev/null");
+  Outcome r;
+  FILE* p = popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), buf.size(), p)) r.out += buf.data();
+  const int st = pclose(p);
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+std::string scene(const std::string& name) { return std::string(MAGBAKE_SOURCE_DIR) + "/scenes/" + name; }
+
+Vec3 vec(const nlohmann::json& j) { return Vec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>()); }
+
+std::string temp_scene(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() / ("magbake_cli_" + name);
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+std::string read(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TEST(EvalCommand, CubePairMatchesAkounYonnet) {
+  const Outcome r = magbake("eval " + scene("validation/cube_pair.yaml") + " --json");
+  ASSERT_EQ(r.code, 0);
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["bodies"].size(), 2u);
+  EXPECT_EQ(j["bodies"][1]["name"], "upper");
+  const double exact = akoun_yonnet_force(1, 1, Vec3::Constant(0.005), Vec3::Constant(0.005), Vec3(0, 0, 0.015))[2];
+  const Vec3 F = vec(j["bodies"][1]["force"]);
+  EXPECT_NEAR(F[2], exact, 0.01 * std::abs(exact));
+  EXPECT_LT((F + vec(j["bodies"][0]["force"])).norm(), 1e-12 * F.norm());
+  EXPECT_GT(j["cells"].get<int>(), 0);
+  EXPECT_TRUE(j["induction"].contains("iterations"));
+  EXPECT_TRUE(j["induction"].contains("residual"));
+  for (const char* key : {"force", "torque", "moment"}) EXPECT_EQ(j["bodies"][0][key].size(), 3u);
+}
+
+TEST(EvalCommand, SoftSphereInFieldHasTheExactMoment) {
+  const Outcome r = magbake("eval " + scene("validation/sphere_in_field.yaml") + " --json");
+  ASSERT_EQ(r.code, 0);
+  const auto j = nlohmann::json::parse(r.out);
+  const double R = 0.005;
+  const double exact = 4 * std::acos(-1.0) * R * R * R * 700.0 / 703.0 * 0.01 / (4e-7 * std::acos(-1.0));
+  EXPECT_NEAR(vec(j["bodies"][0]["moment"])[2], exact, 0.01 * exact);
+  EXPECT_GT(j["induction"]["iterations"].get<int>(), 0);
+  EXPECT_LT(j["induction"]["residual"].get<double>(), 1e-6);
+}
+
+TEST(EvalAndProbe, DipolePairMatchesPointDipoles) {
+  const double mu0 = 4e-7 * std::acos(-1.0);
+  const double m = 1.2 / mu0 * 4.0 / 3.0 * std::acos(-1.0) * 8e-9;
+  const Vec3 xa(0, 0, 0), xb(0.01, 0.003, 0.004);
+  const Vec3 ma(0, 0, m);
+  const Quat q(Eigen::AngleAxisd(std::acos(-1.0) / 6, Vec3::UnitZ()));
+  const Vec3 mb = q * Vec3(m, 0, 0);
+  // Force on b: gradient of mb . B_a by central differences of the closed-form field.
+  Vec3 Fb;
+  for (int k = 0; k < 3; ++k) {
+    Vec3 e = Vec3::Zero();
+    e[k] = 1e-7;
+    Fb[k] = (mb.dot(point_dipole_field(ma, xb + e - xa)) - mb.dot(point_dipole_field(ma, xb - e - xa))) / 2e-7;
+  }
+  const Outcome r = magbake("eval " + scene("validation/dipole_pair.yaml") + " --json");
+  ASSERT_EQ(r.code, 0);
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_LT((vec(j["bodies"][1]["force"]) - Fb).norm(), 1e-5 * Fb.norm());
+  EXPECT_LT((vec(j["bodies"][1]["torque"]) - mb.cross(point_dipole_field(ma, xb - xa))).norm(),
+            1e-5 * mb.norm() * point_dipole_field(ma, xb - xa).norm());
+  // probe: B at two points from both dipoles.
+  const Outcome p = magbake("probe " + scene("validation/dipole_pair.yaml") + " --at 0.02,0,0 --at=-0.01,0.01,0.005 --json");
+  ASSERT_EQ(p.code, 0);
+  const auto jp = nlohmann::json::parse(p.out);
+  ASSERT_EQ(jp["B"].size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    const Vec3 x = vec(jp["points"][i]);
+    const Vec3 ref = point_dipole_field(ma, x - xa) + point_dipole_field(mb, x - xb);
+    EXPECT_LT((vec(jp["B"][i]) - ref).norm(), 1e-9 * ref.norm()) << i;
+  }
+}
+
+TEST(ProbeCommand, CubePairFieldMatchesFurlaniAndReadsPointFiles) {
+  const std::string pts = temp_scene("points.txt", "# x y z (m)\n0.003 0.001 0.0215\n0.02,0.0,0.0075\n\n0 0 -0.02\n");
+  const Outcome r = magbake("probe " + scene("validation/cube_pair.yaml") + " --points " + pts + " --json");
+  ASSERT_EQ(r.code, 0);
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["B"].size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 x = vec(j["points"][i]);
+    const Vec3 ref = furlani_cuboid_field(1.0, Vec3::Constant(0.005), x) +
+                     furlani_cuboid_field(1.0, Vec3::Constant(0.005), x - Vec3(0, 0, 0.015));
+    EXPECT_LT((vec(j["B"][i]) - ref).norm(), 1e-3 * ref.norm()) << x.transpose();
+  }
+  const std::string bad = temp_scene("bad_points.txt", "0 0\n");
+  const Outcome e = magbake("probe " + scene("validation/cube_pair.yaml") + " --points " + bad, true);
+  EXPECT_EQ(e.code, 2);
+  EXPECT_NE(e.out.find("bad_points.txt:1:"), std::string::npos) << e.out;
+}
+
+// The quality presets trade time for accuracy as docs/scene-format.md documents (cube pair,
+// 1 mm gap): draft within 1%, default within 0.2%, high within 0.01%.
+TEST(EvalCommand, QualityPresetsChangeTheErrorAsDocumented) {
+  const double exact = akoun_yonnet_force(1, 1, Vec3::Constant(0.005), Vec3::Constant(0.005), Vec3(0, 0, 0.011))[2];
+  std::string text = read(scene("validation/cube_pair.yaml"));
+  text = std::regex_replace(text, std::regex("position: \\[0, 0, 15\\]"), "position: [0, 0, 11]");
+  double previous = 1;
+  for (auto [q, bound] : {std::pair{"draft", 0.01}, {"default", 0.002}, {"high", 1e-4}}) {
+    const std::string t = std::regex_replace(text, std::regex("quality: default"), std::string("quality: ") + q);
+    const Outcome r = magbake("eval " + temp_scene(std::string("q_") + q + ".yaml", t) + " --json");
+    ASSERT_EQ(r.code, 0) << q;
+    const double err = std::abs(vec(nlohmann::json::parse(r.out)["bodies"][1]["force"])[2] / exact - 1);
+    EXPECT_LT(err, bound) << q;
+    EXPECT_LT(err, previous) << q;
+    previous = err;
+  }
+}
+
+TEST(EvalCommand, SameSceneInMetresAndMillimetresGivesTheSameForces) {
+  const std::string mm = read(scene("validation/cube_pair.yaml"));
+  std::string m = std::regex_replace(mm, std::regex("length: mm"), "length: m");
+  m = std::regex_replace(m, std::regex("\\[10, 10, 10\\]"), "[0.01, 0.01, 0.01]");
+  m = std::regex_replace(m, std::regex("\\[0, 0, 15\\]"), "[0, 0, 0.015]");
+  const auto a = nlohmann::json::parse(magbake("eval " + scene("validation/cube_pair.yaml") + " --json").out);
+  const auto b = nlohmann::json::parse(magbake("eval " + temp_scene("metres.yaml", m) + " --json").out);
+  for (int i = 0; i < 2; ++i) {
+    const Vec3 fa = vec(a["bodies"][i]["force"]), fb = vec(b["bodies"][i]["force"]);
+    EXPECT_LT((fa - fb).norm(), 1e-9 * fa.norm());
+  }
+}
+
+TEST(Commands, InvalidSceneExitsTwoWithPositionsAndNothingOnStdout) {
+  const std::string bad = temp_scene("bad.yaml", "magbake: 1\nunits: {length: mm, angle: deg}\nbodies:\n  - {name: a}\n");
+  const Outcome r = magbake("eval " + bad + " --json");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(r.out.empty());
+  const Outcome e = magbake("check " + bad, true);
+  EXPECT_EQ(e.code, 2);
+  EXPECT_NE(e.out.find("bad.yaml:4:5: bodies[0]: missing required key 'shape'"), std::string::npos) << e.out;
+}
+
+TEST(Commands, CheckAndInfoSummarizeTheDemo) {
+  const Outcome c = magbake("check " + scene("demo.yaml"));
+  EXPECT_EQ(c.code, 0);
+  EXPECT_NE(c.out.find("cells    sphere"), std::string::npos) << c.out;
+  EXPECT_NE(c.out.find("cost"), std::string::npos);
+  const Outcome i = magbake("info " + scene("demo.yaml"));
+  EXPECT_EQ(i.code, 0);
+  EXPECT_NE(i.out.find("toy_magnet_and_sphere"), std::string::npos);
+  EXPECT_EQ(magbake("--help").code, 0);
+  EXPECT_EQ(magbake("eval").code, 2);             // missing scene
+  EXPECT_EQ(magbake("nonsense").code, 2);         // unknown command
+}
+
+TEST(EvalCommand, KinematicBodiesAreAtTheirKeyedPose) {
+  const auto j0 = nlohmann::json::parse(magbake("eval " + scene("demo.yaml") + " --json --time 0").out);
+  const auto j1 = nlohmann::json::parse(magbake("eval " + scene("demo.yaml") + " --json --time 2.5").out);
+  // The magnet's centre of mass follows the keys: 70 mm -> 34 mm.
+  EXPECT_NEAR(vec(j0["bodies"][2]["center_of_mass"])[2], 0.070, 1e-12);
+  EXPECT_NEAR(vec(j1["bodies"][2]["center_of_mass"])[2], 0.034, 1e-12);
+  // Closer: the pull on the steel sphere is much stronger.
+  EXPECT_GT(vec(j1["bodies"][1]["force"])[2], 10 * vec(j0["bodies"][1]["force"])[2]);
+  EXPECT_GT(vec(j0["bodies"][1]["force"])[2], 0);
+}
+
+}  // namespace
+}  // namespace magbake::testing

@@ -1,0 +1,199 @@
+// Every kind of bad input is an error at the right file:line:col with a useful message.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "scene/load.h"
+
+namespace magbake::scene {
+namespace {
+
+// Loads scene text; returns the diagnostics (empty if it loaded).
+Diagnostics problems(const std::string& text, const std::string& file = "test.yaml") {
+  try {
+    load_scene_text(text, file);
+    return Diagnostics(file);
+  } catch (const SceneError& e) {
+    return e.diagnostics();
+  }
+}
+
+// True if some diagnostic is at (line, col) and contains `needle`; prints all otherwise.
+::testing::AssertionResult has(const Diagnostics& d, int line, int col, const std::string& needle) {
+  for (const auto& x : d.items()) {
+    if (x.loc.line == line && x.loc.col == col && (x.message + " " + x.path).find(needle) != std::string::npos) {
+      return ::testing::AssertionSuccess();
+    }
+  }
+  return ::testing::AssertionFailure() << "no diagnostic at " << line << ":" << col << " containing '" << needle
+                                       << "'; got:\n"
+                                       << d.format();
+}
+
+const std::string kHead = "magbake: 1\nunits: {length: mm, angle: deg}\n";
+const std::string kMat = "materials:\n  N42: {kind: permanent, remanence: 1.3, density: 7500}\n  steel: {kind: soft, chi: 700, density: 7850}\n";
+
+TEST(SceneValidation, AValidSceneLoads) {
+  const Diagnostics d = problems(kHead + kMat +
+                                 "bodies:\n"
+                                 "  - {name: a, shape: {sphere: {radius: 2}}, material: steel}\n");
+  EXPECT_TRUE(d.empty()) << d.format();
+}
+
+TEST(SceneValidation, UnknownKeyWithSuggestion) {
+  const Diagnostics d = problems(kHead + kMat +
+                                 "bodies:\n"
+                                 "  - name: a\n"
+                                 "    shape: {sphere: {radius: 2}}\n"
+                                 "    material: steel\n"
+                                 "    restitutoin: 0.3\n");
+  EXPECT_TRUE(has(d, 10, 5, "unknown key 'restitutoin' (did you mean 'restitution'?)"));
+  EXPECT_NE(d.format().find("test.yaml:10:5: bodies[0].restitutoin: unknown key"), std::string::npos) << d.format();
+}
+
+TEST(SceneValidation, UnknownTopLevelKey) {
+  EXPECT_TRUE(has(problems(kHead + "gravitty: [0, 0, -9.81]\n"), 3, 1, "did you mean 'gravity'"));
+}
+
+TEST(SceneValidation, MissingRequiredKeyIsReportedAtItsParent) {
+  EXPECT_TRUE(has(problems("magbake: 1\nname: x\n"), 1, 1, "missing required key 'units'"));
+  const Diagnostics d = problems(kHead + kMat + "bodies:\n  - {name: a, material: steel}\n");
+  EXPECT_TRUE(has(d, 7, 5, "missing required key 'shape'"));
+}
+
+TEST(SceneValidation, WrongType) {
+  EXPECT_TRUE(has(problems(kHead + "magnetics: {theta: fast}\n"), 3, 20, "expected a number, got 'fast'"));
+  EXPECT_TRUE(has(problems(kHead + "gravity: [0, 0]\n"), 3, 10, "expected a list of 3 numbers, got 2"));
+  EXPECT_TRUE(has(problems(kHead + "bodies: {a: 1}\n"), 3, 9, "expected a list of bodies"));
+}
+
+TEST(SceneValidation, NegativeOrZeroSizes) {
+  const Diagnostics d = problems(kHead + kMat +
+                                 "bodies:\n"
+                                 "  - {name: a, shape: {box: [1, -2, 3]}, material: steel}\n"
+                                 "  - {name: b, shape: {sphere: {radius: 0}}, material: steel}\n"
+                                 "  - {name: c, shape: {cylinder: {radius: 1, height: -4}}, material: steel}\n");
+  EXPECT_TRUE(has(d, 7, 28, "box edges must be positive"));
+  EXPECT_TRUE(has(d, 8, 40, "must be a positive length, got 0"));
+  EXPECT_TRUE(has(d, 9, 53, "must be a positive length, got -4"));
+}
+
+TEST(SceneValidation, UnknownMaterialWithSuggestion) {
+  const Diagnostics d = problems(kHead + kMat + "bodies:\n  - {name: a, shape: {sphere: {radius: 2}}, material: steal}\n");
+  EXPECT_TRUE(has(d, 7, 55, "unknown material 'steal' (did you mean 'steel'?)"));
+}
+
+TEST(SceneValidation, PermanentMaterialWithoutDirection) {
+  const Diagnostics d = problems(kHead + kMat + "bodies:\n  - {name: a, shape: {sphere: {radius: 2}}, material: N42}\n");
+  EXPECT_TRUE(has(d, 7, 5, "needs a magnetization direction"));
+  const Diagnostics p = problems(kHead + kMat +
+                                 "bodies:\n"
+                                 "  - name: a\n"
+                                 "    shape: {sphere: {radius: 2}}\n"
+                                 "    material: steel\n"
+                                 "    parts:\n"
+                                 "      - {shape: {box: [1, 1, 1]}, material: N42}\n");
+  EXPECT_TRUE(has(p, 11, 9, "needs a magnetization direction"));
+}
+
+TEST(SceneValidation, NonUnitAndZeroQuaternions) {
+  const std::string body = "  - {name: a, shape: {sphere: {radius: 2}}, material: steel, orientation: {quat: ";
+  EXPECT_TRUE(has(problems(kHead + kMat + "bodies:\n" + body + "[1, 0.1, 0, 0]}}\n"), 7, 82, "not a unit quaternion"));
+  EXPECT_TRUE(has(problems(kHead + kMat + "bodies:\n" + body + "[0, 0, 0, 0]}}\n"), 7, 82, "zero quaternion"));
+}
+
+TEST(SceneValidation, KeysOutOfTimeOrder) {
+  const Diagnostics d = problems(kHead + kMat +
+                                 "bodies:\n"
+                                 "  - name: a\n"
+                                 "    shape: {sphere: {radius: 2}}\n"
+                                 "    material: steel\n"
+                                 "    motion: kinematic\n"
+                                 "    keys:\n"
+                                 "      - {t: 0, position: [0, 0, 0]}\n"
+                                 "      - {t: 2, position: [0, 0, 1]}\n"
+                                 "      - {t: 1, position: [0, 0, 2]}\n");
+  EXPECT_TRUE(has(d, 14, 13, "keys out of time order"));
+}
+
+TEST(SceneValidation, FramesReversedAndBadSubstep) {
+  EXPECT_TRUE(has(problems(kHead + "time: {fps: 24, frames: [100, 1]}\n"), 3, 25, "frame range reversed"));
+  EXPECT_TRUE(has(problems(kHead + "time: {fps: 24, dt: 0}\n"), 3, 21, "substep must be positive"));
+  EXPECT_TRUE(has(problems(kHead + "time: {fps: 24, dt: -0.001}\n"), 3, 21, "substep must be positive"));
+  EXPECT_TRUE(has(problems(kHead + "time: {fps: 24, dt: 0.1}\n"), 3, 21, "must not exceed the frame interval"));
+}
+
+TEST(SceneValidation, UnsupportedVersion) {
+  EXPECT_TRUE(has(problems("magbake: 2\nunits: {length: m, angle: rad}\n"), 1, 10, "unsupported scene format version 2"));
+}
+
+TEST(SceneValidation, DuplicateKeys) {
+  EXPECT_TRUE(has(problems(kHead + "name: a\nname: b\n"), 4, 1, "duplicate key 'name'"));
+  EXPECT_TRUE(has(problems(kHead + "materials:\n  m: {kind: none}\n  m: {kind: none}\n"), 5, 3, "duplicate key 'm'"));
+}
+
+TEST(SceneValidation, BadUnitsAndEnumerations) {
+  EXPECT_TRUE(has(problems("magbake: 1\nunits: {length: inch, angle: deg}\n"), 2, 17, "expected m, cm or mm"));
+  EXPECT_TRUE(has(problems(kHead + "magnetics: {induction: strong}\n"), 3, 24, "expected coupled, paper or off"));
+  EXPECT_TRUE(has(problems(kHead + "materials:\n  m: {kind: permanant, remanence: 1}\n"), 4, 13, "did you mean 'permanent'"));
+}
+
+TEST(SceneValidation, DynamicBodyNeedsAMass) {
+  const Diagnostics d = problems(kHead + "materials:\n  m: {kind: soft, chi: 5}\nbodies:\n  - {name: a, shape: {sphere: {radius: 2}}, material: m}\n");
+  EXPECT_TRUE(has(d, 6, 5, "a dynamic body needs a mass"));
+}
+
+TEST(SceneValidation, SyntaxErrorHasAPosition) {
+  const Diagnostics d = problems(kHead + "bodies: [\n");
+  ASSERT_FALSE(d.empty());
+  EXPECT_GT(d.items()[0].loc.line, 0);
+  EXPECT_NE(d.items()[0].message.find("YAML syntax error"), std::string::npos);
+}
+
+class MeshFiles : public ::testing::Test {
+ protected:
+  std::filesystem::path dir = std::filesystem::temp_directory_path() / "magbake_scene_test";
+  void SetUp() override { std::filesystem::create_directories(dir); }
+  std::string write(const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return (dir / name).string();
+  }
+};
+
+TEST_F(MeshFiles, UnreadableMesh) {
+  const std::string scene = write("s.yaml", kHead + kMat +
+                                                "bodies:\n  - {name: a, shape: {mesh: {file: nowhere.obj}}, material: steel}\n");
+  try {
+    load_scene(scene);
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_TRUE(has(e.diagnostics(), 7, 36, "cannot read mesh"));
+  }
+}
+
+TEST_F(MeshFiles, NonClosedMesh) {
+  // A tetrahedron with one face missing.
+  write("open.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\n");
+  const std::string scene = write("s.yaml", kHead + kMat +
+                                                "bodies:\n  - {name: a, shape: {mesh: {file: open.obj}}, material: steel}\n");
+  try {
+    load_scene(scene);
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_TRUE(has(e.diagnostics(), 7, 36, "mesh is not closed: 3 boundary edges"));
+  }
+}
+
+TEST_F(MeshFiles, MeshPathsAreRelativeToTheSceneFile) {
+  write("tet.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n");
+  const std::string scene = write("s.yaml", kHead + kMat +
+                                                "bodies:\n  - {name: a, shape: {mesh: {file: tet.obj, scale: 10}}, material: steel}\n");
+  const Scene s = load_scene(scene);
+  // Unit tetrahedron x 10 mm: volume 1000/6 mm³.
+  EXPECT_NEAR(s.bodies[0].shape.shape->volume(), 1000.0 / 6 * 1e-9, 1e-18);
+  EXPECT_NEAR(s.bodies[0].mass, 7850 * 1000.0 / 6 * 1e-9, 1e-12);
+}
+
+}  // namespace
+}  // namespace magbake::scene
