@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "io/diff.h"
 #include "scene/load.h"
 
 namespace magbake::cli {
@@ -33,8 +34,12 @@ void print_json(const nlohmann::json& j);
 std::string scene_summary(const scene::Scene& s);
 
 int cmd_check(const std::string& path, const Global& g);
+int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
+             const Global& g);
+int cmd_info_cache(const std::string& path);
 int cmd_info(const std::string& path, const Global& g);
 int cmd_eval(const std::string& path, double time, bool json, const Global& g);
+int cmd_diff(const std::string& a, const std::string& b, const io::DiffOptions& options, const Global& g);
 int cmd_probe(const std::string& path, const std::vector<std::string>& at, const std::string& points_file, double time,
               bool json, const Global& g);
 

@@ -54,11 +54,29 @@ int main(int argc, char** argv) {
   double time = 0;
   bool json = false;
 
+  std::string out_dir, frames;
+  bool resume = false;
+  auto* bake = app.add_subcommand("bake", "simulate a scene into an HDF5 cache (exit 0 ok, 1 failure, 2 bad input, 75 interrupted)");
+  bake->add_option("scene", scene_path, "scene file (YAML)")->required();
+  bake->add_option("-o,--output", out_dir, "output folder (the cache keeps its file name from outputs.cache)");
+  bake->add_option("--frames", frames, "frame range A-B to write (simulation starts at the scene's first frame)");
+  bake->add_flag("--resume", resume, "continue an interrupted bake from its last complete frame");
+
+  std::string cache_a, cache_b;
+  io::DiffOptions diff_options;
+  auto* diff = app.add_subcommand("diff", "compare two caches (exit 0 same, 1 differ, 2 error)");
+  diff->add_option("a", cache_a, "first cache (.h5)")->required();
+  diff->add_option("b", cache_b, "second cache (.h5)")->required();
+  diff->add_option("--atol", diff_options.atol, "absolute tolerance (SI units)")->capture_default_str();
+  diff->add_option("--rtol", diff_options.rtol, "relative tolerance")->capture_default_str();
+  diff->add_option("--angle-tol", diff_options.angle_tol, "orientation tolerance, radians")->capture_default_str();
+  diff->add_flag("--exact", diff_options.exact, "require bit equality (wall times are never compared)");
+
   auto* check = app.add_subcommand("check", "validate a scene and print a one-screen summary with its cost (exit 0/2)");
   check->add_option("scene", scene_path, "scene file (YAML)")->required();
 
-  auto* info = app.add_subcommand("info", "human-readable summary of a scene");
-  info->add_option("file", scene_path, "scene file (YAML)")->required();
+  auto* info = app.add_subcommand("info", "human-readable summary of a scene or a cache");
+  info->add_option("file", scene_path, "scene file (YAML) or cache (.h5)")->required();
 
   auto* eval = app.add_subcommand("eval", "forces, torques and moments of every body at one instant");
   eval->add_option("scene", scene_path, "scene file (YAML)")->required();
@@ -96,6 +114,8 @@ int main(int argc, char** argv) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, g.threads);
   }
 
+  if (*bake) return cli::cmd_bake(scene_path, out_dir, frames, resume, g);
+  if (*diff) return cli::cmd_diff(cache_a, cache_b, diff_options, g);
   if (*check) return cli::cmd_check(scene_path, g);
   if (*info) return cli::cmd_info(scene_path, g);
   if (*eval) return cli::cmd_eval(scene_path, time, json, g);

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "cli.h"
+#include "io/cache.h"
 #include "scene/scene_magnetics.h"
 
 namespace magbake::cli {
@@ -86,11 +87,8 @@ int cmd_check(const std::string& path, const Global&) {
 }
 
 int cmd_info(const std::string& path, const Global& g) {
-  if (path.size() > 3 && (path.ends_with(".h5") || path.ends_with(".hdf5"))) {
-    std::cerr << "magbake info: " << path << ": reading caches arrives with `magbake bake`\n";
-    return kUsage;
-  }
   (void)g;
+  if (H5Fis_hdf5(path.c_str()) > 0 || path.ends_with(".h5") || path.ends_with(".partial")) return cmd_info_cache(path);
   auto s = load_or_report(path);
   if (!s) return kUsage;
   std::cout << scene_summary(*s);

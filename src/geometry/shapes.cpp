@@ -132,3 +132,57 @@ MassProperties TorusShape::mass_properties() const {
 }
 
 }  // namespace magbake::geometry
+
+namespace magbake::geometry {
+
+Tessellation tessellate(const Shape& shape, int n) {
+  Tessellation t;
+  switch (shape.kind()) {
+    case ShapeKind::kBox: {
+      const Vec3 h = static_cast<const BoxShape&>(shape).half();
+      for (int i = 0; i < 8; ++i) t.vertices.emplace_back((i & 1 ? 1 : -1) * h[0], (i & 2 ? 1 : -1) * h[1], (i & 4 ? 1 : -1) * h[2]);
+      const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                            {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+      for (auto& q : f) t.triangles.emplace_back(q[0], q[1], q[2]);
+      break;
+    }
+    case ShapeKind::kSphere: {
+      const double r = static_cast<const SphereShape&>(shape).radius();
+      const int nu = n, nv = std::max(4, n / 2);
+      t.vertices.emplace_back(0, 0, -r);
+      for (int j = 1; j < nv; ++j) {
+        const double th = kPi * j / nv;
+        for (int i = 0; i < nu; ++i) {
+          const double ph = 2 * kPi * i / nu;
+          t.vertices.emplace_back(r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph), -r * std::cos(th));
+        }
+      }
+      t.vertices.emplace_back(0, 0, r);
+      auto id = [&](int j, int i) { return 1 + (j - 1) * nu + (i % nu); };
+      for (int i = 0; i < nu; ++i) t.triangles.emplace_back(0, id(1, i + 1), id(1, i));
+      for (int j = 1; j < nv - 1; ++j) {
+        for (int i = 0; i < nu; ++i) {
+          t.triangles.emplace_back(id(j, i), id(j, i + 1), id(j + 1, i + 1));
+          t.triangles.emplace_back(id(j, i), id(j + 1, i + 1), id(j + 1, i));
+        }
+      }
+      const int top = static_cast<int>(t.vertices.size()) - 1;
+      for (int i = 0; i < nu; ++i) t.triangles.emplace_back(top, id(nv - 1, i), id(nv - 1, i + 1));
+      break;
+    }
+    case ShapeKind::kCylinder:
+    case ShapeKind::kTorus:
+    case ShapeKind::kMesh: {
+      std::shared_ptr<const MeshShape> m;
+      if (shape.kind() == ShapeKind::kCylinder) m = static_cast<const CylinderShape&>(shape).triangulate(n);
+      if (shape.kind() == ShapeKind::kTorus) m = static_cast<const TorusShape&>(shape).triangulate(n);
+      const MeshShape& mesh = m ? *m : static_cast<const MeshShape&>(shape);
+      t.vertices = mesh.vertices();
+      t.triangles = mesh.triangles();
+      break;
+    }
+  }
+  return t;
+}
+
+}  // namespace magbake::geometry

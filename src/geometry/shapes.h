@@ -114,6 +114,14 @@ class TorusShape final : public Shape {
 
 /// A closed, consistently oriented triangle mesh. Inside test by the generalized winding number,
 /// evaluated hierarchically (Barill et al. 2018: far triangle clusters as one dipole term).
+/// A triangle mesh of a shape's surface, for rendering and collision hulls (shape frame, m).
+struct Tessellation {
+  std::vector<Vec3> vertices;
+  std::vector<Eigen::Vector3i> triangles;  ///< outward (counter-clockwise seen from outside)
+};
+/// Tessellates any shape: `segments` around curved axes (meshes are returned as they are).
+Tessellation tessellate(const Shape& shape, int segments = 48);
+
 /// Field integral E(x) = ∫_T (x - y) / |x - y|³ dA_y of a flat triangle (a, b, c) (unit charge
 /// density; multiply by sigma / 4pi for H). Closed form: solid angle along the normal plus one
 /// logarithm per edge in the plane. Singular only on the triangle's edges.

@@ -211,23 +211,114 @@ struct TreeBuilder {
 
 }  // namespace
 
-Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& settings) {
+Model model_from_cells(int body_count, const CellTable& cells, const PartTable& parts, int leaf_size,
+                       std::vector<int>* order) {
+  if (order) order->clear();
   Model m;
-  m.body_count = static_cast<int>(bodies.size());
-  m.body_cell_begin.assign(bodies.size() + 1, 0);
-  m.body_root.assign(bodies.size(), -1);
-  m.body_permanent.assign(bodies.size(), 0);
-  m.body_induced.assign(bodies.size(), 0);
-  std::vector<const Solid*> part_solid;
-
-  std::int64_t budget = settings.max_cells;
-  for (int b = 0; b < m.body_count; ++b) {
-    // Cells of all magnetic parts of this body, body frame, in part order.
+  m.body_count = body_count;
+  m.body_cell_begin.assign(body_count + 1, 0);
+  m.body_root.assign(body_count, -1);
+  m.body_permanent.assign(body_count, 0);
+  m.body_induced.assign(body_count, 0);
+  for (std::size_t p = 0; p < parts.body.size(); ++p) {
+    m.part_body.push_back(parts.body[p]);
+    m.part_pose.push_back(parts.pose[p]);
+    m.part_rotation.push_back(parts.pose[p].rotation.toRotationMatrix());
+    m.part_magnetization.push_back(parts.magnetization[p]);
+    m.part_chi.push_back(parts.chi[p]);
+    m.part_half.push_back(parts.half[p]);
+    m.part_consistent.push_back(0);
+    if (parts.magnetization[p].squaredNorm() > 0) m.body_permanent[parts.body[p]] = 1;
+    if (parts.chi[p] != 0.0) m.body_induced[parts.body[p]] = 1;
+  }
+  // Cells of each body, in the given order, then the body's hierarchy.
+  std::vector<std::vector<int>> of_body(body_count);
+  for (std::size_t c = 0; c < cells.size(); ++c) of_body[cells.body[c]].push_back(static_cast<int>(c));
+  for (int b = 0; b < body_count; ++b) {
     BodyCells bc;
+    for (int c : of_body[b]) {
+      bc.pos.push_back(cells.position[c]);
+      bc.center.push_back(cells.center[c]);
+      bc.mom.push_back(cells.moment[c]);
+      bc.half.push_back(cells.half[c]);
+      bc.vol.push_back(cells.volume[c]);
+      bc.chi.push_back(cells.chi[c]);
+      bc.reach.push_back(cells.half[c].norm());
+      bc.clamp.push_back(cells.half[c].minCoeff());
+      bc.part.push_back(cells.part[c]);
+      bc.full.push_back(cells.full[c]);
+    }
+    const int begin = m.cell_count();
+    m.body_cell_begin[b] = begin;
+    if (!bc.pos.empty()) {
+      std::vector<int> perm(bc.pos.size());
+      std::iota(perm.begin(), perm.end(), 0);
+      TreeBuilder tb{bc, std::max(1, leaf_size), perm, m, b};
+      const int root = tb.new_node();
+      m.body_root[b] = root;
+      tb.build(root, 0, static_cast<int>(bc.pos.size()));
+      // Node ranges are local to the body: shift them to global cell indices.
+      for (int n = root; n < m.node_count(); ++n) {
+        m.node_begin[n] += begin;
+        m.node_end[n] += begin;
+      }
+      for (int id : perm) {
+        if (order) order->push_back(of_body[b][id]);
+        m.cell_position.push_back(bc.pos[id]);
+        m.cell_center.push_back(bc.center[id]);
+        m.cell_moment.push_back(bc.mom[id]);
+        m.cell_volume.push_back(bc.vol[id]);
+        m.cell_chi.push_back(bc.chi[id]);
+        m.cell_half.push_back(bc.half[id]);
+        m.cell_reach.push_back(bc.reach[id]);
+        m.cell_clamp.push_back(bc.clamp[id]);
+        m.cell_part.push_back(bc.part[id]);
+        m.cell_body.push_back(b);
+        m.cell_full.push_back(bc.full[id]);
+      }
+    }
+    m.body_cell_begin[b + 1] = m.cell_count();
+  }
+  for (int c = 0; c < m.cell_count(); ++c) {
+    if (m.cell_chi[c] != 0.0) m.induced_cells.push_back(c);
+  }
+  m.cell_polarizability.assign(m.cell_count(), Mat3::Zero());
+  m.near_begin.assign(m.induced_cells.size() + 1, 0);
+  return m;
+}
+
+void model_tables(const Model& m, CellTable& cells, PartTable& parts) {
+  cells = CellTable{};
+  parts = PartTable{};
+  for (int c = 0; c < m.cell_count(); ++c) {
+    cells.body.push_back(m.cell_body[c]);
+    cells.part.push_back(m.cell_part[c]);
+    cells.position.push_back(m.cell_position[c]);
+    cells.center.push_back(m.cell_center[c]);
+    cells.half.push_back(m.cell_half[c]);
+    cells.moment.push_back(m.cell_moment[c]);
+    cells.volume.push_back(m.cell_volume[c]);
+    cells.chi.push_back(m.cell_chi[c]);
+    cells.full.push_back(m.cell_full[c]);
+  }
+  parts.body = m.part_body;
+  parts.pose = m.part_pose;
+  parts.magnetization = m.part_magnetization;
+  parts.half = m.part_half;
+  parts.chi = m.part_chi;
+}
+
+Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& settings) {
+  CellTable cells;
+  PartTable parts;
+  std::vector<const Solid*> part_solid;
+  std::vector<PartReport> reports;
+  std::int64_t budget = settings.max_cells;
+  for (int b = 0; b < static_cast<int>(bodies.size()); ++b) {
     for (const PartSpec& ps : bodies[b].parts) {
       if (ps.material.kind == MaterialKind::kNone) continue;
       assert(ps.solid != nullptr);
-      const int pid = static_cast<int>(m.part_body.size());
+      const int pid = static_cast<int>(parts.body.size());
       const Mat3 R = ps.part_to_body.rotation.toRotationMatrix();
       const Vec3 M = R * ps.material.magnetization();
       const double chi = ps.material.induced() ? ps.material.susceptibility() : 0.0;
@@ -247,63 +338,28 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
       rep.rescale = rep.true_volume / rep.grid_volume;
       for (std::size_t q = 0; q < pc.centroid.size(); ++q) {
         const double v = pc.volume[q] * rep.rescale;
-        bc.pos.push_back(ps.part_to_body.apply(pc.centroid[q]));
-        bc.center.push_back(ps.part_to_body.apply(pc.center[q]));
-        bc.vol.push_back(v);
-        bc.mom.push_back(M * v);
-        bc.chi.push_back(chi);
-        bc.half.push_back(pc.half);
-        bc.reach.push_back(pc.half.norm());
-        bc.clamp.push_back(pc.half.minCoeff());
-        bc.part.push_back(pid);
-        bc.full.push_back(pc.full[q]);
+        cells.body.push_back(b);
+        cells.part.push_back(pid);
+        cells.position.push_back(ps.part_to_body.apply(pc.centroid[q]));
+        cells.center.push_back(ps.part_to_body.apply(pc.center[q]));
+        cells.half.push_back(pc.half);
+        cells.moment.push_back(M * v);
+        cells.volume.push_back(v);
+        cells.chi.push_back(chi);
+        cells.full.push_back(pc.full[q]);
         rep.full_cells += pc.full[q];
       }
-      m.part_body.push_back(b);
-      m.part_pose.push_back(ps.part_to_body);
-      m.part_rotation.push_back(R);
-      m.part_magnetization.push_back(M);
-      m.part_chi.push_back(chi);
-      m.part_half.push_back(pc.half);
-      m.part_consistent.push_back(0);
-      m.part_report.push_back(rep);
+      parts.body.push_back(b);
+      parts.pose.push_back(ps.part_to_body);
+      parts.magnetization.push_back(M);
+      parts.half.push_back(pc.half);
+      parts.chi.push_back(chi);
+      reports.push_back(rep);
       part_solid.push_back(ps.solid);
-      if (ps.material.kind == MaterialKind::kPermanent) m.body_permanent[b] = 1;
-      if (chi != 0.0) m.body_induced[b] = 1;
     }
-    const int begin = m.cell_count();
-    m.body_cell_begin[b] = begin;
-    if (!bc.pos.empty()) {
-      std::vector<int> perm(bc.pos.size());
-      std::iota(perm.begin(), perm.end(), 0);
-      TreeBuilder tb{bc, std::max(1, settings.leaf_size), perm, m, b};
-      const int root = tb.new_node();
-      m.body_root[b] = root;
-      tb.build(root, 0, static_cast<int>(bc.pos.size()));
-      // Node ranges are local to the body: shift them to global cell indices.
-      for (int n = root; n < m.node_count(); ++n) {
-        m.node_begin[n] += begin;
-        m.node_end[n] += begin;
-      }
-      for (int id : perm) {
-        m.cell_position.push_back(bc.pos[id]);
-        m.cell_center.push_back(bc.center[id]);
-        m.cell_moment.push_back(bc.mom[id]);
-        m.cell_volume.push_back(bc.vol[id]);
-        m.cell_chi.push_back(bc.chi[id]);
-        m.cell_half.push_back(bc.half[id]);
-        m.cell_reach.push_back(bc.reach[id]);
-        m.cell_clamp.push_back(bc.clamp[id]);
-        m.cell_part.push_back(bc.part[id]);
-        m.cell_body.push_back(b);
-        m.cell_full.push_back(bc.full[id]);
-      }
-    }
-    m.body_cell_begin[b + 1] = m.cell_count();
   }
-  for (int c = 0; c < m.cell_count(); ++c) {
-    if (m.cell_chi[c] != 0.0) m.induced_cells.push_back(c);
-  }
+  Model m = model_from_cells(static_cast<int>(bodies.size()), cells, parts, settings.leaf_size);
+  m.part_report = reports;
   build_induction_model(m, part_solid, settings);
   return m;
 }

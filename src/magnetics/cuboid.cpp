@@ -122,6 +122,31 @@ Vec3 cuboid_h_field(const Vec3& half, const Vec3& M, const Vec3& x) {
   return kInv4Pi * H;
 }
 
+Mat3 cuboid_h_tensor(const Vec3& half, const Vec3& x) {
+  // Sum over the 8 vertices V (parity P = s0 s1 s2) of the face-corner terms, d = x - V:
+  //   N[w][w] = sum P atan(d_u d_v / (d_w R)),  N[u][v] = -sum P ln(d_k + R), k the third axis.
+  double diag[3] = {0, 0, 0}, logs[3] = {0, 0, 0};
+  for (int q = 0; q < 8; ++q) {
+    const double s[3] = {(q & 1) ? 1.0 : -1.0, (q & 2) ? 1.0 : -1.0, (q & 4) ? 1.0 : -1.0};
+    const double P = s[0] * s[1] * s[2];
+    const double d[3] = {x[0] - s[0] * half[0], x[1] - s[1] * half[1], x[2] - s[2] * half[2]};
+    const double d2[3] = {d[0] * d[0], d[1] * d[1], d[2] * d[2]};
+    const double R = std::sqrt(d2[0] + d2[1] + d2[2]);
+    for (int k = 0; k < 3; ++k) {
+      const int u = (k + 1) % 3, v = (k + 2) % 3;
+      logs[k] += P * log_plus_r(d[k], R, d2[u] + d2[v]);
+      const double num = d[u] * d[v], den = d[k] * R;
+      diag[k] += P * (d[k] >= 0.0 ? std::atan2(num, den) : std::atan2(-num, -den));
+    }
+  }
+  Mat3 N;
+  N(0, 0) = diag[0], N(1, 1) = diag[1], N(2, 2) = diag[2];
+  N(0, 1) = N(1, 0) = -logs[2];
+  N(0, 2) = N(2, 0) = -logs[1];
+  N(1, 2) = N(2, 1) = -logs[0];
+  return kInv4Pi * N;
+}
+
 Vec3 cuboid_b_field(const Vec3& half, const Vec3& M, const Vec3& x) {
   Vec3 B = kMu0 * cuboid_h_field(half, M, x);
   if (std::abs(x[0]) < half[0] && std::abs(x[1]) < half[1] && std::abs(x[2]) < half[2]) B += kMu0 * M;
@@ -235,7 +260,7 @@ Mat3 cuboid_mean_field_tensor(const Cuboid& target, const Cuboid& source, int or
               const Vec3 local(cut[0][i] + d0 * rule.x[p], cut[1][j] + d1 * rule.x[q], cut[2][k] + d2 * rule.x[r]);
               const Vec3 x = ct + Rt * local;
               const double w = rule.w[p] * rule.w[q] * rule.w[r] * d0 * d1 * d2;
-              for (int c = 0; c < 3; ++c) N.col(c) += w * cuboid_h_field(hs, Vec3::Unit(c), x);
+              N += w * cuboid_h_tensor(hs, x);
             }
           }
         }

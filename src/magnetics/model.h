@@ -110,6 +110,33 @@ struct Model {
   bool empty() const { return cell_position.empty(); }
 };
 
+/// Cells as flat records in any order (body frame): what build_model() derives from solids, and
+/// what a cache stores so field export can rebuild the model without the scene's files.
+struct CellTable {
+  std::vector<int> body, part;
+  std::vector<Vec3> position, center, half, moment;  ///< m, m, m, A·m² (permanent, body frame)
+  std::vector<double> volume, chi;
+  std::vector<std::uint8_t> full;
+  std::size_t size() const { return body.size(); }
+};
+
+/// Parts of a model (index = part id in CellTable::part).
+struct PartTable {
+  std::vector<int> body;
+  std::vector<Pose> pose;            ///< part frame -> body frame
+  std::vector<Vec3> magnetization;   ///< permanent M, body frame, A/m
+  std::vector<Vec3> half;            ///< cell half-edges, part frame, m
+  std::vector<double> chi;
+};
+
+/// Builds the hierarchies over given cells (no induction data: polarizabilities stay zero).
+/// If `order` is given, it receives for every model cell the index of the table row it came from.
+Model model_from_cells(int body_count, const CellTable& cells, const PartTable& parts, int leaf_size = 32,
+                       std::vector<int>* order = nullptr);
+
+/// The cells and parts of a model, in model order (inverse of model_from_cells).
+void model_tables(const Model& model, CellTable& cells, PartTable& parts);
+
 /// Decomposes every body into dipole cells (paper §4.2, with inside-fraction weighting of
 /// boundary cells) and builds the per-body hierarchies. A cell is a cuboid on its part's lattice
 /// carrying the moment of the material inside it (smeared uniformly over the cuboid). Throws std::runtime_error when a part

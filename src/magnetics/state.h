@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <unordered_map>
 #include <span>
 #include <vector>
 
@@ -63,6 +64,14 @@ struct State {
     std::vector<int> cell;             ///< source cell of each entry
     std::vector<Mat3> tensor;          ///< correction tensor of each entry
   } induced_near;
+  /// Cross-body near-field tensors kept while two bodies keep their relative pose (resting
+  /// contact): key = (target body, source body).
+  struct PairTensors {
+    Mat3 rotation = Mat3::Identity();  ///< source body axes in target body axes
+    Vec3 offset = Vec3::Zero();        ///< source origin in the target body frame, m
+    std::unordered_map<std::int64_t, Mat3> tensor;  ///< (target cell, source cell) -> target body frame
+  };
+  std::map<std::pair<int, int>, PairTensors> cross_tensors;
   std::vector<Mat3> body_rotation;    ///< (nbody) rotation matrices
   std::vector<Mat3> part_rotation;    ///< (npart) part frame -> world
   // float copies for the single-precision block kernels: (ncell) each

@@ -85,3 +85,24 @@ TEST(CuboidPair, ConservesMomentumAndIsFrameIndependent) {
 
 }  // namespace
 }  // namespace magbake::testing
+
+namespace magbake::testing {
+namespace {
+
+TEST(CuboidField, TensorMatchesTheFieldOfEachMagnetization) {
+  const magnetics::Vec3 h(0.003, 0.001, 0.002);
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-0.01, 0.01);
+  for (int t = 0; t < 100; ++t) {
+    const magnetics::Vec3 x(u(rng), u(rng), u(rng));
+    const magnetics::Mat3 N = magnetics::cuboid_h_tensor(h, x);
+    for (int c = 0; c < 3; ++c) {
+      const magnetics::Vec3 ref = magnetics::cuboid_h_field(h, magnetics::Vec3::Unit(c), x);
+      EXPECT_LT((N.col(c) - ref).norm(), 1e-12 * (ref.norm() + 1)) << x.transpose();
+    }
+    EXPECT_LT((N - N.transpose()).norm(), 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace magbake::testing

@@ -1,0 +1,225 @@
+// magbake bake: scene -> HDF5 cache (and, as their commands land, field volumes and previews).
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+
+#include "cli.h"
+#include "io/cache.h"
+#include "progress.h"
+#include "scene/scene_magnetics.h"
+#include "sim/simulator.h"
+
+namespace magbake::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+// "A-B" or "A" -> [A, B].
+bool parse_range(const std::string& text, int& a, int& b) {
+  const auto dash = text.find('-', 1);
+  try {
+    std::size_t used = 0;
+    if (dash == std::string::npos) {
+      a = b = std::stoi(text, &used);
+      return used == text.size();
+    }
+    a = std::stoi(text.substr(0, dash), &used);
+    if (used != dash) return false;
+    b = std::stoi(text.substr(dash + 1), &used);
+    return used == text.size() - dash - 1;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+// Test hook: pretend the disk is full when writing frame N (MAGBAKE_TEST_FAIL_WRITE_AT_FRAME).
+void maybe_inject_write_failure(int frame) {
+  static const char* env = std::getenv("MAGBAKE_TEST_FAIL_WRITE_AT_FRAME");
+  if (env && std::atoi(env) == frame) throw io::h5::Error("write frame: No space left on device (injected by test)");
+}
+
+}  // namespace
+
+fs::path cache_path_for(const scene::Scene& s, const std::string& out_dir) {
+  const fs::path given = s.cache ? fs::path(*s.cache) : fs::path(s.name + ".h5");
+  if (out_dir.empty()) return given;
+  return fs::path(out_dir) / given.filename();
+}
+
+int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
+             const Global& g) {
+  auto loaded = load_or_report(path);
+  if (!loaded) return kUsage;
+  const scene::Scene& s = *loaded;
+
+  int first = s.first_frame, last = s.last_frame;
+  if (!frames.empty()) {
+    if (!parse_range(frames, first, last) || first > last) {
+      spdlog::error("--frames expects A-B with A <= B, got '{}'", frames);
+      return kUsage;
+    }
+    if (first < s.first_frame || last > s.last_frame) {
+      spdlog::error("--frames {}-{} is outside the scene's frames {}-{}", first, last, s.first_frame, s.last_frame);
+      return kUsage;
+    }
+  }
+
+  // Output location: must be creatable and writable before any work is done.
+  const fs::path cache = cache_path_for(s, out_dir);
+  const fs::path partial = fs::path(cache.string() + ".partial");
+  const fs::path dir = cache.parent_path().empty() ? fs::path(".") : cache.parent_path();
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) {
+    spdlog::error("cannot create the output folder '{}': {}", dir.string(), ec ? ec.message() : "not a folder");
+    return kUsage;
+  }
+  {
+    const fs::path probe = dir / ".magbake_write_test";
+    std::ofstream test(probe);
+    if (!test) {
+      spdlog::error("the output folder '{}' is not writable", dir.string());
+      return kUsage;
+    }
+    test.close();
+    fs::remove(probe, ec);
+  }
+
+  magnetics::Model model;
+  try {
+    model = scene::build_magnetics_model(s);
+  } catch (const std::exception& e) {
+    spdlog::error("{}: {}", path, e.what());
+    return kUsage;
+  }
+  sim::Simulator simulator(s, model);
+  install_interrupt_handlers();
+
+  // Fresh bake, or resume from the last complete frame of an interrupted (or killed) one.
+  fs::path writing = partial;
+  std::unique_ptr<io::CacheWriter> writer;
+  int next_frame = 0;  // the next frame to write
+  try {
+    std::optional<io::CacheReader> previous;
+    if (resume) {
+      if (fs::exists(partial)) {
+        previous.emplace(partial.string());
+        if (previous->scene_hash() != s.hash) {
+          spdlog::error("cannot resume: {} was baked from a different version of {} (scene hash differs)",
+                        partial.string(), path);
+          return kUsage;
+        }
+      } else if (fs::exists(cache)) {
+        spdlog::info("nothing to resume: {} is complete", cache.string());
+        return kOk;
+      } else {
+        spdlog::warn("nothing to resume ({} not found): baking from the start", partial.string());
+      }
+    }
+    if (previous && previous->frame_count() > 0) {
+      const int k = previous->frame_count();
+      const io::CacheFrame last_good = previous->frame(k - 1);
+      writing = fs::path(partial.string() + ".resume");
+      writer = std::make_unique<io::CacheWriter>(writing.string(), s, model, MAGBAKE_VERSION);
+      writer->copy_frames_from(*previous, k);
+      simulator.restore(previous->sim_state(k - 1, s), last_good.frame);
+      next_frame = last_good.frame + 1;
+      spdlog::info("resuming after frame {} ({} frames kept from {})", last_good.frame, k, partial.string());
+      previous.reset();
+    } else {
+      writer = std::make_unique<io::CacheWriter>(writing.string(), s, model, MAGBAKE_VERSION);
+      simulator.initialize();
+      next_frame = s.first_frame;
+    }
+  } catch (const std::exception& e) {
+    spdlog::error("cannot start the cache: {}", e.what());
+    return kFailure;
+  }
+
+  if (s.field) spdlog::warn("outputs.field is set, but field volumes are not produced by this version yet");
+  if (s.preview) spdlog::warn("outputs.preview is set, but previews are not produced by this version yet");
+
+  Progress progress("bake " + s.name, last - first + 1, g.quiet);
+  const auto t0 = std::chrono::steady_clock::now();
+  double magnetics_seconds = 0, rigid_seconds = 0;
+  int written = 0;
+  auto finish_partial = [&](io::BakeStatus status) {
+    try {
+      writer->set_status(status);
+      writer->close();
+    } catch (const std::exception& e) {
+      spdlog::error("closing the cache failed: {}", e.what());
+    }
+    if (writing != partial) fs::rename(writing, partial, ec);
+  };
+  try {
+    // The state at next_frame - 1 is in the simulator; frames before `first` are simulated only.
+    if (next_frame == s.first_frame) {
+      if (next_frame >= first) {
+        maybe_inject_write_failure(next_frame);
+        writer->append(next_frame, 0.0, simulator.state(), simulator.measure());
+        ++written;
+        progress.update(next_frame - first + 1, "frame " + std::to_string(next_frame));
+      }
+      ++next_frame;
+    }
+    while (next_frame <= last) {
+      if (interrupt_requested()) {
+        progress.finish();
+        finish_partial(io::BakeStatus::kInterrupted);
+        spdlog::warn("interrupted: frames up to {} are in {}; continue with --resume", next_frame - 1, partial.string());
+        return kInterrupted;
+      }
+      const sim::FrameDiagnostics d = simulator.advance_frame();
+      magnetics_seconds += d.magnetics_seconds;
+      rigid_seconds += d.rigid_seconds;
+      if (simulator.frame() >= first) {
+        maybe_inject_write_failure(simulator.frame());
+        writer->append(simulator.frame(), s.frame_time(simulator.frame()), simulator.state(), d);
+        ++written;
+      }
+      progress.update(simulator.frame() - first + 1, "frame " + std::to_string(simulator.frame()));
+      ++next_frame;
+    }
+  } catch (const sim::NumericalFault& e) {
+    progress.finish();
+    spdlog::error("{}; the {} good frames before it are in {}", e.what(), writer->frames_written(), partial.string());
+    finish_partial(io::BakeStatus::kFailed);
+    return kFailure;
+  } catch (const io::h5::Error& e) {
+    progress.finish();
+    spdlog::error("writing the cache failed: {}; {} is incomplete (frames up to the last flushed one are readable)",
+                  e.what(), partial.string());
+    try {
+      writer->close();
+    } catch (...) {
+    }
+    if (writing != partial) fs::rename(writing, partial, ec);
+    return kFailure;
+  }
+  progress.finish();
+  try {
+    writer->set_status(io::BakeStatus::kComplete);
+    writer->close();
+  } catch (const std::exception& e) {
+    spdlog::error("finishing the cache failed: {}", e.what());
+    return kFailure;
+  }
+  // Only a complete cache gets the final name.
+  fs::rename(writing, cache, ec);
+  if (ec) {
+    spdlog::error("cannot move {} to {}: {}", writing.string(), cache.string(), ec.message());
+    return kFailure;
+  }
+  if (writing != partial) fs::remove(partial, ec);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  spdlog::info("wrote {} ({} frames) in {:.2f} s: magnetics {:.2f} s, rigid bodies {:.2f} s", cache.string(), written,
+               wall, magnetics_seconds, rigid_seconds);
+  return kOk;
+}
+
+}  // namespace magbake::cli

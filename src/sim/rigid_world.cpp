@@ -1,0 +1,307 @@
+#include "rigid_world.h"
+
+#include <BulletCollision/CollisionDispatch/btInternalEdgeUtility.h>
+#include <HACD/hacdHACD.h>
+#include <btBulletDynamicsCommon.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <cmath>
+#include <numbers>
+
+namespace magbake::sim {
+namespace {
+
+btVector3 bt(const Vec3& v) { return btVector3(v[0], v[1], v[2]); }
+Vec3 eig(const btVector3& v) { return Vec3(v.x(), v.y(), v.z()); }
+btQuaternion bt(const Quat& q) { return btQuaternion(q.x(), q.y(), q.z(), q.w()); }
+Quat eig(const btQuaternion& q) { return Quat(q.w(), q.x(), q.y(), q.z()); }
+
+// Convex hulls approximating a closed mesh (HACD, Bullet extras), for dynamic concave bodies.
+std::vector<std::vector<Vec3>> convex_pieces(const geometry::Tessellation& t) {
+  // HACD works in normalized coordinates: scale to a unit bounding box.
+  Eigen::AlignedBox3d bb;
+  for (const Vec3& v : t.vertices) bb.extend(v);
+  const double s = 1.0 / std::max(bb.sizes().maxCoeff(), 1e-12);
+  std::vector<HACD::Vec3<HACD::Real>> pts;
+  std::vector<HACD::Vec3<long>> tris;
+  for (const Vec3& v : t.vertices) pts.emplace_back((v[0] - bb.center()[0]) * s, (v[1] - bb.center()[1]) * s, (v[2] - bb.center()[2]) * s);
+  for (const auto& f : t.triangles) tris.emplace_back(f[0], f[1], f[2]);
+  HACD::HACD h;
+  h.SetPoints(pts.data());
+  h.SetNPoints(pts.size());
+  h.SetTriangles(tris.data());
+  h.SetNTriangles(tris.size());
+  h.SetCompacityWeight(0.1);
+  h.SetVolumeWeight(0.0);
+  h.SetNClusters(1);
+  h.SetNVerticesPerCH(64);
+  h.SetConcavity(0.03);
+  h.SetAddExtraDistPoints(false);
+  h.SetAddNeighboursDistPoints(false);
+  h.SetAddFacesPoints(false);
+  h.Compute();
+  std::vector<std::vector<Vec3>> out;
+  for (std::size_t c = 0; c < h.GetNClusters(); ++c) {
+    std::vector<HACD::Vec3<HACD::Real>> cp(h.GetNPointsCH(c));
+    std::vector<HACD::Vec3<long>> ct(h.GetNTrianglesCH(c));
+    h.GetCH(c, cp.data(), ct.data());
+    std::vector<Vec3> hull;
+    for (const auto& p : cp) hull.push_back(Vec3(p.X(), p.Y(), p.Z()) / s + bb.center());
+    if (hull.size() >= 4) out.push_back(std::move(hull));
+  }
+  return out;
+}
+
+// Smooths contacts of bodies rolling over the internal edges of static triangle meshes.
+bool adjust_internal_edges(btManifoldPoint& cp, const btCollisionObjectWrapper* w0, int part0, int index0,
+                           const btCollisionObjectWrapper* w1, int part1, int index1) {
+  (void)part0, (void)index0;
+  btAdjustInternalEdgeContacts(cp, w1, w0, part1, index1);
+  return true;
+}
+
+}  // namespace
+
+struct RigidWorld::Impl {
+  const scene::Scene& scene;
+  btDefaultCollisionConfiguration config;
+  btCollisionDispatcher dispatcher{&config};
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  std::unique_ptr<btDiscreteDynamicsWorld> world;
+  std::vector<std::unique_ptr<btCollisionShape>> shapes;  // every shape, children included
+  std::vector<std::unique_ptr<btTriangleMesh>> meshes;
+  std::vector<std::unique_ptr<btTriangleInfoMap>> edge_infos;
+  std::vector<std::unique_ptr<btRigidBody>> bodies;
+  // Bullet's body frame in the scene body frame: x_body = principal * x_bullet + origin.
+  std::vector<Mat3> principal;
+  std::vector<Vec3> origin;
+
+  explicit Impl(const scene::Scene& s) : scene(s) {}
+
+  btCollisionShape* own(btCollisionShape* sh) {
+    shapes.emplace_back(sh);
+    return sh;
+  }
+
+  // Collision shape of a scene shape in its own frame.
+  btCollisionShape* make_shape(const scene::ShapeDesc& d, bool dynamic, double margin) {
+    using geometry::ShapeKind;
+    switch (d.kind) {
+      case ShapeKind::kBox: {
+        auto* s = own(new btBoxShape(bt(0.5 * d.size)));
+        s->setMargin(margin);
+        return s;
+      }
+      case ShapeKind::kSphere: return own(new btSphereShape(d.radius));
+      case ShapeKind::kCylinder: {
+        auto* s = own(new btCylinderShapeZ(btVector3(d.radius, d.radius, 0.5 * d.height)));
+        s->setMargin(margin);
+        return s;
+      }
+      case ShapeKind::kTorus:
+      case ShapeKind::kMesh: break;
+    }
+    const geometry::Tessellation t = geometry::tessellate(*d.shape, 48);
+    if (!dynamic) {
+      // Static and kinematic concave shapes: a BVH triangle mesh with internal-edge info.
+      auto mesh = std::make_unique<btTriangleMesh>(true, false);
+      for (const auto& f : t.triangles) mesh->addTriangle(bt(t.vertices[f[0]]), bt(t.vertices[f[1]]), bt(t.vertices[f[2]]));
+      auto* s = new btBvhTriangleMeshShape(mesh.get(), true);
+      s->setMargin(margin);
+      own(s);
+      auto info = std::make_unique<btTriangleInfoMap>();
+      btGenerateInternalEdgeInfo(s, info.get());
+      edge_infos.push_back(std::move(info));
+      meshes.push_back(std::move(mesh));
+      return s;
+    }
+    // Dynamic concave shapes: a compound of convex hulls.
+    std::vector<std::vector<Vec3>> pieces;
+    if (d.kind == ShapeKind::kTorus) {
+      // Exact-enough sectors: the hull of the tube between two angles.
+      const int n = 24, m = 16;
+      for (int k = 0; k < n; ++k) {
+        std::vector<Vec3> hull;
+        for (int e = 0; e <= 1; ++e) {
+          const double a = 2 * std::numbers::pi * (k + e) / n;
+          for (int j = 0; j < m; ++j) {
+            const double b = 2 * std::numbers::pi * j / m;
+            const double rho = d.major + d.minor * std::cos(b);
+            hull.emplace_back(rho * std::cos(a), rho * std::sin(a), d.minor * std::sin(b));
+          }
+        }
+        pieces.push_back(hull);
+      }
+    } else {
+      pieces = convex_pieces(t);
+    }
+    auto* compound = new btCompoundShape();
+    own(compound);
+    for (const auto& hull : pieces) {
+      auto* h = new btConvexHullShape();
+      for (const Vec3& p : hull) h->addPoint(bt(p), false);
+      h->recalcLocalAabb();
+      h->setMargin(margin);
+      own(h);
+      btTransform id;
+      id.setIdentity();
+      compound->addChildShape(id, h);
+    }
+    return compound;
+  }
+
+  btTransform bullet_transform(int b, const Quat& q_body, const Vec3& com_world) const {
+    // x_world = R (x_body - com) + com_world; x_body = P x_bullet + o.
+    const Mat3 R = q_body.toRotationMatrix();
+    const Vec3 pos = com_world + R * (origin[b] - scene.bodies[b].com);
+    btTransform tr;
+    tr.setOrigin(bt(pos));
+    tr.setRotation(bt(Quat(R * principal[b]).normalized()));
+    return tr;
+  }
+};
+
+RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>(scene)) {
+  Impl& m = *impl_;
+  m.world = std::make_unique<btDiscreteDynamicsWorld>(&m.dispatcher, &m.broadphase, &m.solver, &m.config);
+  gContactAddedCallback = adjust_internal_edges;
+  m.world->setGravity(bt(scene.gravity));
+  m.world->getDispatchInfo().m_deterministicOverlappingPairs = true;
+  btContactSolverInfo& si = m.world->getSolverInfo();
+  si.m_numIterations = 20;
+  si.m_splitImpulse = 1;
+  si.m_splitImpulsePenetrationThreshold = -0.0002;  // cm-scale bodies (Bullet assumes metres)
+  m.principal.resize(scene.bodies.size(), Mat3::Identity());
+  m.origin.resize(scene.bodies.size(), Vec3::Zero());
+
+  const bool any_magnetic = [&] {
+    for (const auto& b : scene.bodies) {
+      if (b.magnetic(scene.materials)) return true;
+    }
+    return false;
+  }();
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    const scene::Body& b = scene.bodies[i];
+    const bool dynamic = b.motion == scene::Motion::kDynamic;
+    const double extent = b.shape.shape->bounds().sizes().minCoeff();
+    const double margin = std::min(5e-4, 0.1 * extent);
+    btCollisionShape* shape = m.make_shape(b.shape, dynamic, margin);
+    btVector3 inertia(0, 0, 0);
+    if (dynamic) {
+      // Bullet wants principal axes at the centre of mass: diagonalize (deterministic).
+      Eigen::SelfAdjointEigenSolver<Mat3> es(b.inertia);
+      Mat3 P = es.eigenvectors();
+      if (P.determinant() < 0) P.col(2) = -P.col(2);
+      const bool simple = (b.com.norm() < 1e-12) && (b.inertia - Mat3(b.inertia.diagonal().asDiagonal())).norm() <=
+                                                        1e-12 * b.inertia.norm();
+      if (simple) {
+        inertia = bt(b.inertia.diagonal());
+      } else {
+        m.principal[i] = P;
+        m.origin[i] = b.com;
+        inertia = bt(es.eigenvalues());
+        // Child transform: shape frame in Bullet's frame, x_bullet = P^T (x_shape - com).
+        auto* compound = new btCompoundShape();
+        m.own(compound);
+        btTransform child;
+        child.setBasis(btMatrix3x3(bt(Quat(P.transpose()).normalized())));
+        child.setOrigin(bt(-(P.transpose() * b.com)));
+        compound->addChildShape(child, shape);
+        shape = compound;
+      }
+    }
+    btRigidBody::btRigidBodyConstructionInfo ci(dynamic ? b.mass : 0.0, nullptr, shape, inertia);
+    ci.m_friction = b.friction;
+    ci.m_restitution = b.restitution;
+    ci.m_linearDamping = 0;
+    ci.m_angularDamping = 0;
+    auto body = std::make_unique<btRigidBody>(ci);
+    if (b.motion == scene::Motion::kKinematic) {
+      body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+      body->setActivationState(DISABLE_DEACTIVATION);
+    } else if (b.motion == scene::Motion::kStatic) {
+      body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_STATIC_OBJECT);
+    } else {
+      // Magnetic forces act at a distance: magnetic bodies never sleep (a sleeping body
+      // ignores applied forces). Others may, with thresholds for cm-scale motion.
+      if (any_magnetic && b.magnetic(scene.materials)) body->setActivationState(DISABLE_DEACTIVATION);
+      body->setSleepingThresholds(0.005, 0.05);
+      // Continuous collision for small fast bodies.
+      body->setCcdMotionThreshold(0.5 * extent);
+      body->setCcdSweptSphereRadius(0.4 * extent);
+    }
+    if (b.shape.kind == geometry::ShapeKind::kMesh || b.shape.kind == geometry::ShapeKind::kTorus) {
+      if (!dynamic) body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+    }
+    m.world->addRigidBody(body.get());
+    m.bodies.push_back(std::move(body));
+  }
+}
+
+RigidWorld::~RigidWorld() {
+  for (auto& b : impl_->bodies) impl_->world->removeRigidBody(b.get());
+}
+
+void RigidWorld::set_state(const SimState& s) {
+  Impl& m = *impl_;
+  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+    btRigidBody* b = m.bodies[i].get();
+    const btTransform tr = m.bullet_transform(int(i), s.orientation[i], s.com_position[i]);
+    b->setWorldTransform(tr);
+    b->setInterpolationWorldTransform(tr);
+    b->setCenterOfMassTransform(tr);
+    if (m.scene.bodies[i].motion == scene::Motion::kDynamic) {
+      // Bullet's origin is the centre of mass for dynamic bodies.
+      b->setLinearVelocity(bt(s.velocity[i]));
+      b->setAngularVelocity(bt(s.angular_velocity[i]));
+    } else {
+      b->setLinearVelocity(btVector3(0, 0, 0));
+      b->setAngularVelocity(btVector3(0, 0, 0));
+    }
+    b->clearForces();
+  }
+}
+
+void RigidWorld::get_state(SimState& s) const {
+  const Impl& m = *impl_;
+  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+    const btRigidBody* b = m.bodies[i].get();
+    const btTransform& tr = b->getCenterOfMassTransform();
+    const Quat qb = eig(tr.getRotation());
+    const Mat3 R = qb.toRotationMatrix() * m.principal[i].transpose();  // body axes -> world
+    const Quat q = Quat(R).normalized();
+    const Vec3 com_world = eig(tr.getOrigin()) + R * (m.scene.bodies[i].com - m.origin[i]);
+    const Vec3 w = eig(b->getAngularVelocity());
+    s.orientation[i] = q;
+    s.com_position[i] = com_world;
+    s.angular_velocity[i] = w;
+    s.velocity[i] = eig(b->getLinearVelocity()) + w.cross(com_world - eig(tr.getOrigin()));
+  }
+}
+
+void RigidWorld::step(double t, double h, const std::vector<Vec3>& force, const std::vector<Vec3>& torque) {
+  Impl& m = *impl_;
+  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+    const scene::Body& sb = m.scene.bodies[i];
+    btRigidBody* b = m.bodies[i].get();
+    if (sb.motion == scene::Motion::kKinematic) {
+      // The pose at the end of the step; Bullet derives the contact velocity from the change.
+      const magnetics::Pose p = sb.pose_at(t + h);
+      b->setWorldTransform(m.bullet_transform(int(i), p.rotation, p.position + p.rotation * sb.com));
+    } else if (sb.motion == scene::Motion::kDynamic) {
+      // Forces are cleared by every stepSimulation call, which also applies gravity once.
+      b->applyCentralForce(bt(force[i]));
+      b->applyTorque(bt(torque[i]));
+    }
+  }
+  m.world->stepSimulation(h, 0, h);
+}
+
+std::string RigidWorld::bullet_version() {
+  const int v = btGetVersion();
+  return std::to_string(v / 100) + "." + std::to_string(v % 100);
+}
+
+}  // namespace magbake::sim

@@ -1,0 +1,51 @@
+// SimState: everything that changes during a bake, as flat arrays per body (index = scene body).
+#pragma once
+
+#include <vector>
+
+#include "magnetics/types.h"
+
+namespace magbake::sim {
+
+using magnetics::Mat3;
+using magnetics::Quat;
+using magnetics::Vec3;
+
+/// State of every body at one instant. Poses are of the centre-of-mass frame with the body's
+/// own axes (scene body frame shifted to the centre of mass), world frame.
+struct SimState {
+  double time = 0;                       ///< s since the first frame
+  std::vector<Vec3> com_position;        ///< (nbody x 3) m
+  std::vector<Quat> orientation;         ///< (nbody) body axes -> world
+  std::vector<Vec3> velocity;            ///< (nbody x 3) of the centre of mass, m/s
+  std::vector<Vec3> angular_velocity;    ///< (nbody x 3) world, rad/s
+  std::vector<Vec3> magnetic_force;      ///< (nbody x 3) last substep's, N
+  std::vector<Vec3> magnetic_torque;     ///< (nbody x 3) last substep's, about the COM, N·m
+  std::vector<Vec3> induced_moment;      ///< (ninduced x 3) world, A·m² (Model::induced_cells order)
+
+  void resize(std::size_t nbody) {
+    com_position.assign(nbody, Vec3::Zero());
+    orientation.assign(nbody, Quat::Identity());
+    velocity.assign(nbody, Vec3::Zero());
+    angular_velocity.assign(nbody, Vec3::Zero());
+    magnetic_force.assign(nbody, Vec3::Zero());
+    magnetic_torque.assign(nbody, Vec3::Zero());
+  }
+};
+
+/// Per-frame diagnostics (what happened between the previous frame and this one).
+struct FrameDiagnostics {
+  double kinetic_energy = 0;         ///< J (translation + rotation)
+  double gravity_energy = 0;         ///< J, -sum m g.x (dynamic bodies)
+  double magnetic_energy = 0;        ///< J, pair energy of the last substep (see magnetics::Result)
+  Vec3 momentum = Vec3::Zero();      ///< kg m/s, dynamic bodies
+  Vec3 angular_momentum = Vec3::Zero();  ///< kg m²/s about the world origin, dynamic bodies
+  double magnetics_seconds = 0;      ///< wall time in the magnetics library
+  double rigid_seconds = 0;          ///< wall time in Bullet
+  long long cells_visited = 0;       ///< cell pairs + node pairs evaluated, summed over substeps
+  int induction_iterations = 0;      ///< GMRES iterations summed over substeps
+  double induction_residual = 0;     ///< largest final residual over the substeps
+  int substeps = 0;                  ///< physics substeps taken (more than nominal when refined)
+};
+
+}  // namespace magbake::sim
