@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "cli.h"
+#include "io/h5.h"
 #include "geometry/shapes.h"
 #include "magnetics/system.h"
 
@@ -43,6 +44,7 @@ int run_cubes(double gap_mm, double cell_mm, double theta) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  io::h5::no_atexit();
   CLI::App app{"magbake - baker for magnetic rigid-body shots (scene -> HDF5 cache, field volumes, previews)"};
   app.require_subcommand(1);
   cli::Global g;

@@ -18,6 +18,14 @@ herr_t walk(unsigned n, const H5E_error2_t* e, void* out) {
 std::string stack_message() {
   std::string msg;
   H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, walk, &msg);
+  // The file driver's report is long ("file write failed: time = ..., error message = '...'"):
+  // keep the system's message.
+  const std::string key = "error message = '";
+  if (const auto at = msg.find(key); at != std::string::npos) {
+    const auto end = msg.find('\'', at + key.size());
+    msg = msg.substr(at + key.size(), end == std::string::npos ? std::string::npos : end - at - key.size());
+    errno = 0;
+  }
   // System errors (disk full) are reported by errno through the driver.
   if (errno != 0 && msg.find("errno") == std::string::npos) {
     msg += std::string("; ") + std::strerror(errno);
@@ -37,6 +45,12 @@ hid_t check_id(hid_t id, const std::string& what) {
 }
 
 void quiet() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+
+void no_atexit() {
+  // HDF5 closes open files at exit; a file whose writes failed (disk full) then crashes the
+  // library in 1.10. The process frees everything anyway.
+  H5dont_atexit();
+}
 
 void Handle::reset() {
   if (id_ < 0) return;

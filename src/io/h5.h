@@ -22,6 +22,8 @@ void check(herr_t status, const std::string& what);
 hid_t check_id(hid_t id, const std::string& what);
 /// Silences HDF5's automatic error printing (call once; messages come through Error).
 void quiet();
+/// Keeps HDF5 from closing files at process exit (call first thing in main).
+void no_atexit();
 
 /// An owned hid_t closed with the right H5*close.
 class Handle {

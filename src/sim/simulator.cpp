@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <limits>
 
 #include "scene/scene_magnetics.h"
 
@@ -66,6 +68,19 @@ void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
   d.magnetic_energy = mag_result_.energy;
 }
 
+void Simulator::inject_fault_for_tests(int frame) {
+  // MAGBAKE_TEST_NAN_AT_FRAME=N poisons the first dynamic body's force while computing frame N,
+  // so tests can check that a numerical fault stops the bake cleanly.
+  static const char* env = std::getenv("MAGBAKE_TEST_NAN_AT_FRAME");
+  if (!env || std::atoi(env) != frame) return;
+  for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
+    if (scene_.bodies[i].motion == scene::Motion::kDynamic) {
+      state_.magnetic_force[i][0] = std::numeric_limits<double>::quiet_NaN();
+      return;
+    }
+  }
+}
+
 void Simulator::check_finite(int frame) const {
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     auto bad = [](const Vec3& v) { return !v.allFinite(); };
@@ -104,6 +119,7 @@ FrameDiagnostics Simulator::advance_frame() {
     for (int s = 0; s < split; ++s) {
       const double t = t0 + s * hs;
       if (s > 0 || k > 0) evaluate_magnetics(d);  // the first substep reuses the frame's forces
+      inject_fault_for_tests(next);
       check_finite(next);
       const auto tr = Clock::now();
       world_->step(t, hs, state_.magnetic_force, state_.magnetic_torque);

@@ -57,6 +57,7 @@ class Simulator {
  private:
   void evaluate_magnetics(FrameDiagnostics& d);
   void check_finite(int frame) const;
+  void inject_fault_for_tests(int frame);
 
   const scene::Scene& scene_;
   const magnetics::Model& model_;

@@ -1,0 +1,275 @@
+// magbake bake, diff and info through the real binary: determinism, resume, crash safety,
+// golden caches and bad input.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/mount.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "io/cache.h"
+#include "io/diff.h"
+
+namespace magbake::testing {
+namespace {
+namespace fs = std::filesystem;
+
+struct Outcome {
+  int code = -1;
+  std::string out;
+};
+
+Outcome sh(const std::string& cmd) {
+  Outcome r;
+  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), buf.size(), p)) r.out += buf.data();
+  const int st = pclose(p);
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+std::string exe() { return MAGBAKE_EXE; }
+std::string src(const std::string& rel) { return std::string(MAGBAKE_SOURCE_DIR) + "/" + rel; }
+
+class Bake : public ::testing::Test {
+ protected:
+  fs::path dir;
+  void SetUp() override {
+    dir = fs::temp_directory_path() /
+          ("magbake_bake_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  Outcome bake(const std::string& scene, const std::string& out, const std::string& extra = "") {
+    return sh(exe() + " " + extra + " bake " + scene + " -o " + (dir / out).string());
+  }
+};
+
+TEST_F(Bake, SameThreadCountOrNotTheCacheIsIdentical) {
+  const std::string scene = src("tests/golden/sphere_pickup.yaml");
+  ASSERT_EQ(bake(scene, "t1", "--threads 1").code, 0);
+  ASSERT_EQ(bake(scene, "t2", "--threads 2").code, 0);
+  ASSERT_EQ(bake(scene, "t2b", "--threads 2").code, 0);
+  const std::string a = (dir / "t1/sphere_pickup.h5").string(), b = (dir / "t2/sphere_pickup.h5").string(),
+                    c = (dir / "t2b/sphere_pickup.h5").string();
+  const Outcome d12 = sh(exe() + " diff --exact " + a + " " + b);
+  EXPECT_EQ(d12.code, 0) << d12.out;
+  EXPECT_NE(d12.out.find("bit for bit"), std::string::npos);
+  EXPECT_EQ(sh(exe() + " diff --exact " + b + " " + c).code, 0);
+}
+
+TEST_F(Bake, GoldenCachesStillMatch) {
+  for (const char* name : {"magnets_in_space", "sphere_pickup"}) {
+    ASSERT_EQ(bake(src(std::string("tests/golden/") + name + ".yaml"), "g").code, 0);
+    const Outcome d = sh(exe() + " diff " + src(std::string("tests/golden/") + name + ".h5") + " " +
+                         (dir / "g" / (std::string(name) + ".h5")).string());
+    EXPECT_EQ(d.code, 0) << name << "\n" << d.out;
+  }
+}
+
+TEST_F(Bake, DiffReportsTheFirstFrameAndLargestDeviationPerBody) {
+  // Same scene, one body nudged: diff must say which body, from which frame, by how much.
+  std::ifstream in(src("tests/golden/magnets_in_space.yaml"));
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  text.replace(text.find("position: [14, 3, 2]"), 20, "position: [14, 3, 2.01]");
+  std::ofstream(dir / "nudged.yaml") << text;
+  ASSERT_EQ(bake((dir / "nudged.yaml").string(), "n").code, 0);
+  const Outcome d = sh(exe() + " diff " + src("tests/golden/magnets_in_space.h5") + " " +
+                       (dir / "n/magnets_in_space.h5").string());
+  EXPECT_EQ(d.code, 1) << d.out;
+  EXPECT_NE(d.out.find("b                    position"), std::string::npos) << d.out;
+  EXPECT_NE(d.out.find("baked from different scene files"), std::string::npos);
+  // ...and a generous tolerance accepts it.
+  EXPECT_EQ(sh(exe() + " diff --atol 1e4 --rtol 1 --angle-tol 4 " + src("tests/golden/magnets_in_space.h5") + " " +
+               (dir / "n/magnets_in_space.h5").string())
+                .code,
+            0);
+}
+
+// Runs a bake in the background and sends `sig` once its progress passes `percent`.
+int bake_and_signal(const std::string& scene, const fs::path& out, int sig, int percent) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const std::string o = out.string();
+    const int fd = ::open((o + ".log").c_str(), O_CREAT | O_WRONLY | O_TRUNC, 0644);
+    dup2(fd, 1), dup2(fd, 2);
+    execl(MAGBAKE_EXE, MAGBAKE_EXE, "--threads", "1", "bake", scene.c_str(), "-o", o.c_str(), (char*)nullptr);
+    _exit(127);
+  }
+  // Not a tty: the bake prints "Progress: NN%" lines to the log.
+  for (int i = 0; i < 6000; ++i) {
+    std::ifstream log(out.string() + ".log");
+    std::string line, last;
+    while (std::getline(log, line)) {
+      if (line.rfind("Progress: ", 0) == 0) last = line;
+    }
+    if (!last.empty() && std::stoi(last.substr(10)) >= percent) break;
+    usleep(5000);
+  }
+  kill(pid, sig);
+  int st = 0;
+  waitpid(pid, &st, 0);
+  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+}
+
+TEST_F(Bake, InterruptedBakeResumesAndMatches) {
+  const std::string scene = src("tests/golden/sphere_pickup.yaml");
+  ASSERT_EQ(bake(scene, "full", "--threads 1").code, 0);
+  const int code = bake_and_signal(scene, dir / "cut", SIGTERM, 40);
+  ASSERT_EQ(code, 75) << "exit code of an interrupted bake";
+  const fs::path partial = dir / "cut/sphere_pickup.h5.partial";
+  ASSERT_TRUE(fs::exists(partial));
+  EXPECT_FALSE(fs::exists(dir / "cut/sphere_pickup.h5"));  // never under the final name
+  int kept = 0;
+  {
+    const io::CacheReader r(partial.string());
+    EXPECT_EQ(r.status(), io::BakeStatus::kInterrupted);
+    kept = r.frame_count();
+    ASSERT_GT(kept, 0);
+    ASSERT_LT(kept, 25);
+  }
+  ASSERT_EQ(sh(exe() + " --threads 1 bake " + scene + " -o " + (dir / "cut").string() + " --resume").code, 0);
+  EXPECT_FALSE(fs::exists(partial));
+  const io::CacheReader full((dir / "full/sphere_pickup.h5").string()), resumed((dir / "cut/sphere_pickup.h5").string());
+  ASSERT_EQ(resumed.frame_count(), 25);
+  // Frames before the interruption: bit for bit.
+  for (int f = 0; f < kept; ++f) {
+    const io::CacheFrame a = full.frame(f), b = resumed.frame(f);
+    for (std::size_t i = 0; i < a.position.size(); ++i) {
+      EXPECT_EQ(a.position[i], b.position[i]) << "frame " << f;
+      EXPECT_EQ(a.orientation[i].coeffs(), b.orientation[i].coeffs()) << "frame " << f;
+      EXPECT_EQ(a.velocity[i], b.velocity[i]) << "frame " << f;
+    }
+  }
+  // Later frames: Bullet's restart drops its contact caches, so they agree within a tolerance
+  // (stated in docs/cache-format.md): 0.2 mm in position over the rest of this shot.
+  io::DiffOptions loose;
+  loose.atol = 2e-4;
+  loose.rtol = 0;
+  loose.angle_tol = 0.2;
+  double worst = 0;
+  for (int f = kept; f < 25; ++f) {
+    const io::CacheFrame a = full.frame(f), b = resumed.frame(f);
+    for (std::size_t i = 0; i < a.position.size(); ++i) worst = std::max(worst, (a.position[i] - b.position[i]).norm());
+  }
+  EXPECT_LT(worst, 2e-4);
+  std::printf("resume after %d frames: largest later position difference %.3g m\n", kept, worst);
+}
+
+TEST_F(Bake, KillNineLeavesAReadableCacheWithEveryCompletedFrame) {
+  const std::string scene = src("scenes/demo.yaml");
+  const int code = bake_and_signal(scene, dir / "k", SIGKILL, 30);
+  EXPECT_EQ(code, 128 + SIGKILL);
+  const fs::path partial = dir / "k/demo.h5.partial";
+  ASSERT_TRUE(fs::exists(partial));
+  const io::CacheReader r(partial.string());
+  EXPECT_EQ(r.status(), io::BakeStatus::kRunning);  // killed: never marked
+  ASSERT_GE(r.frame_count(), 20);                     // 30% of 90 frames were reported done
+  // Every completed frame reads back, and matches an uninterrupted bake's frames.
+  ASSERT_EQ(bake(scene, "ref", "--threads 1").code, 0);
+  const io::CacheReader ref((dir / "ref/demo.h5").string());
+  for (int f = 0; f < r.frame_count(); ++f) {
+    const io::CacheFrame a = r.frame(f), b = ref.frame(f);
+    EXPECT_EQ(a.frame, b.frame);
+    for (std::size_t i = 0; i < a.position.size(); ++i) EXPECT_EQ(a.position[i], b.position[i]) << f;
+  }
+  // info works on it, and so does --resume.
+  EXPECT_EQ(sh(exe() + " info " + partial.string()).code, 0);
+  EXPECT_EQ(sh(exe() + " --threads 1 bake " + scene + " -o " + (dir / "k").string() + " --resume").code, 0);
+  EXPECT_TRUE(fs::exists(dir / "k/demo.h5"));
+}
+
+TEST_F(Bake, NumericalFaultStopsWithBodyAndFrameAndKeepsGoodFrames) {
+  const Outcome r = sh("MAGBAKE_TEST_NAN_AT_FRAME=7 " + exe() + " bake " + src("tests/golden/sphere_pickup.yaml") +
+                       " -o " + (dir / "nan").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.out.find("non-finite magnetic force or torque on body 'ball' while computing frame 7"), std::string::npos)
+      << r.out;
+  const io::CacheReader c((dir / "nan/sphere_pickup.h5.partial").string());
+  EXPECT_EQ(c.status(), io::BakeStatus::kFailed);
+  EXPECT_EQ(c.frame_count(), 6);
+  EXPECT_FALSE(fs::exists(dir / "nan/sphere_pickup.h5"));
+}
+
+TEST_F(Bake, UnwritableOutputFolderIsAClearError) {
+  std::ofstream(dir / "a_file") << "x";
+  const Outcome r = bake(src("tests/golden/sphere_pickup.yaml"), "a_file/sub");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("cannot create the output folder"), std::string::npos) << r.out;
+  if (geteuid() != 0) {  // root writes anywhere: permissions only bind other users
+    fs::create_directories(dir / "ro");
+    fs::permissions(dir / "ro", fs::perms::owner_read | fs::perms::owner_exec);
+    const Outcome p = bake(src("tests/golden/sphere_pickup.yaml"), "ro");
+    EXPECT_EQ(p.code, 2);
+    EXPECT_NE(p.out.find("not writable"), std::string::npos) << p.out;
+  }
+}
+
+TEST_F(Bake, FullDiskFailsCleanlyWithoutAFinalFile) {
+  // A real full disk: a 96 KiB tmpfs when we may mount one (root in CI); else an injected write
+  // failure at the same point.
+  const fs::path mnt = dir / "tiny";
+  fs::create_directories(mnt);
+  const bool mounted = geteuid() == 0 && ::mount("tmpfs", mnt.c_str(), "tmpfs", 0, "size=96k") == 0;
+  const std::string scene = src("scenes/demo.yaml");
+  Outcome r;
+  if (mounted) {
+    r = bake(scene, "tiny");
+  } else {
+    r = sh("MAGBAKE_TEST_FAIL_WRITE_AT_FRAME=5 " + exe() + " bake " + scene + " -o " + mnt.string());
+  }
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_TRUE(r.out.find("writing the cache failed") != std::string::npos ||
+              r.out.find("cannot start the cache") != std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("No space left on device"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(mnt / "demo.h5"));
+  if (mounted) ::umount(mnt.c_str());
+  std::printf("full disk: %s\n", mounted ? "real tmpfs" : "injected failure");
+}
+
+TEST_F(Bake, ForeignCorruptAndMissingFilesAreErrorsForDiffAndInfo) {
+  std::ofstream(dir / "random.h5") << "this is not HDF5 at all";
+  // A valid HDF5 file that is not a cache.
+  {
+    const hid_t f = H5Fcreate((dir / "foreign.h5").c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    H5Fclose(f);
+  }
+  // A truncated cache.
+  fs::copy_file(src("tests/golden/sphere_pickup.h5"), dir / "truncated.h5");
+  fs::resize_file(dir / "truncated.h5", 3000);
+  const std::string good = src("tests/golden/sphere_pickup.h5");
+  for (const char* bad : {"random.h5", "foreign.h5", "truncated.h5", "missing.h5"}) {
+    const Outcome d = sh(exe() + " diff " + good + " " + (dir / bad).string());
+    EXPECT_EQ(d.code, 2) << bad << "\n" << d.out;
+    const Outcome i = sh(exe() + " info " + (dir / bad).string());
+    EXPECT_EQ(i.code, 2) << bad << "\n" << i.out;
+  }
+  EXPECT_NE(sh(exe() + " info " + (dir / "foreign.h5").string()).out.find("not a magbake cache"), std::string::npos);
+  EXPECT_NE(sh(exe() + " info " + (dir / "random.h5").string()).out.find("not an HDF5 file"), std::string::npos);
+}
+
+TEST_F(Bake, FarmProgressLinesAndFrameRange) {
+  const Outcome r = sh(exe() + " bake " + src("tests/golden/magnets_in_space.yaml") + " -o " + (dir / "p").string() +
+                       " --frames 1-10");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("Progress: 100%"), std::string::npos);
+  EXPECT_NE(r.out.find("ALF_PROGRESS 100%"), std::string::npos);
+  EXPECT_EQ(io::CacheReader((dir / "p/magnets_in_space.h5").string()).frame_count(), 10);
+  EXPECT_EQ(sh(exe() + " bake " + src("tests/golden/magnets_in_space.yaml") + " --frames 5-2").code, 2);
+  EXPECT_EQ(sh(exe() + " bake " + src("tests/golden/magnets_in_space.yaml") + " --frames 1-999").code, 2);
+}
+
+TEST_F(Bake, CacheIsReadableByH5py) {
+  const Outcome r = sh("/usr/bin/python3 " + src("tests/bake/read_cache.py") + " " + src("tests/golden/sphere_pickup.h5"));
+  EXPECT_EQ(r.code, 0) << r.out;
+}
+
+}  // namespace
+}  // namespace magbake::testing
