@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "cli.h"
+#include "field_export.h"
 #include "io/cache.h"
 #include "progress.h"
 #include "scene/scene_magnetics.h"
@@ -17,6 +18,8 @@ namespace magbake::cli {
 namespace fs = std::filesystem;
 
 namespace {
+
+}  // namespace
 
 // "A-B" or "A" -> [A, B].
 bool parse_range(const std::string& text, int& a, int& b) {
@@ -35,6 +38,8 @@ bool parse_range(const std::string& text, int& a, int& b) {
     return false;
   }
 }
+
+namespace {
 
 // Test hook: pretend the disk is full when writing frame N (MAGBAKE_TEST_FAIL_WRITE_AT_FRAME).
 void maybe_inject_write_failure(int frame) {
@@ -140,7 +145,6 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
     return kFailure;
   }
 
-  if (s.field) spdlog::warn("outputs.field is set, but field volumes are not produced by this version yet");
   if (s.preview) spdlog::warn("outputs.preview is set, but previews are not produced by this version yet");
 
   Progress progress("bake " + s.name, last - first + 1, g.quiet);
@@ -219,6 +223,14 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   spdlog::info("wrote {} ({} frames) in {:.2f} s: magnetics {:.2f} s, rigid bodies {:.2f} s", cache.string(), written,
                wall, magnetics_seconds, rigid_seconds);
+  // Outputs that read the cache: field volumes (outputs.field), frames written by this bake.
+  if (s.field) {
+    FieldRequest req;
+    req.frames = std::make_pair(first, last);
+    if (!out_dir.empty()) req.pattern = (fs::path(out_dir) / fs::path(s.field->path).filename()).string();
+    const int rc = export_field(cache.string(), req, g);
+    if (rc != kOk) return rc;
+  }
   return kOk;
 }
 

@@ -34,6 +34,8 @@ void print_json(const nlohmann::json& j);
 std::string scene_summary(const scene::Scene& s);
 
 int cmd_check(const std::string& path, const Global& g);
+/// "A-B" or "A" -> a, b.
+bool parse_range(const std::string& text, int& a, int& b);
 int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
              const Global& g);
 int cmd_info_cache(const std::string& path);

@@ -8,6 +8,8 @@
 #include <memory>
 
 #include "cli.h"
+#include "field_export.h"
+#include "progress.h"
 #include "io/h5.h"
 #include "geometry/shapes.h"
 #include "magnetics/system.h"
@@ -74,6 +76,19 @@ int main(int argc, char** argv) {
   diff->add_option("--angle-tol", diff_options.angle_tol, "orientation tolerance, radians")->capture_default_str();
   diff->add_flag("--exact", diff_options.exact, "require bit equality (wall times are never compared)");
 
+  std::string field_cache, field_frames, field_bounds;
+  cli::FieldRequest field_req;
+  double field_voxel = 0, field_margin = -1;
+  auto* field = app.add_subcommand("field", "B-field volumes (OpenVDB, one per frame) from a cache");
+  field->add_option("cache", field_cache, "cache (.h5)")->required();
+  field->add_option("--frames", field_frames, "frame range A-B (default: every frame of the cache)");
+  field->add_option("-o,--output", field_req.pattern, "file pattern, e.g. out/field.####.vdb (default: outputs.field.path)");
+  field->add_option("--voxel", field_voxel, "voxel edge in metres (default: outputs.field.voxel, else region/128)");
+  field->add_option("--bounds", field_bounds, "region xmin,ymin,zmin,xmax,ymax,zmax in metres (default: auto)");
+  field->add_option("--margin", field_margin, "margin around the magnetic bodies for auto bounds, metres");
+  field->add_option("--threshold", field_req.threshold, "voxels with |B| below this (tesla) stay inactive")->capture_default_str();
+  field->add_option("--theta", field_req.theta, "tree opening angle (accuracy, see docs)")->capture_default_str();
+
   auto* check = app.add_subcommand("check", "validate a scene and print a one-screen summary with its cost (exit 0/2)");
   check->add_option("scene", scene_path, "scene file (YAML)")->required();
 
@@ -116,6 +131,29 @@ int main(int argc, char** argv) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, g.threads);
   }
 
+  if (*field) {
+    if (!field_frames.empty()) {
+      int fa, fb;
+      if (!cli::parse_range(field_frames, fa, fb)) {
+        spdlog::error("--frames expects A-B, got '{}'", field_frames);
+        return cli::kUsage;
+      }
+      field_req.frames = std::make_pair(fa, fb);
+    }
+    if (field_voxel > 0) field_req.voxel = field_voxel;
+    if (field_margin >= 0) field_req.margin = field_margin;
+    if (!field_bounds.empty()) {
+      double v[6];
+      if (std::sscanf(field_bounds.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf", v, v + 1, v + 2, v + 3, v + 4, v + 5) != 6 ||
+          !(v[0] < v[3] && v[1] < v[4] && v[2] < v[5])) {
+        spdlog::error("--bounds expects xmin,ymin,zmin,xmax,ymax,zmax with min < max, got '{}'", field_bounds);
+        return cli::kUsage;
+      }
+      field_req.bounds = magnetics::Box3(magnetics::Vec3(v[0], v[1], v[2]), magnetics::Vec3(v[3], v[4], v[5]));
+    }
+    cli::install_interrupt_handlers();
+    return cli::export_field(field_cache, field_req, g);
+  }
   if (*bake) return cli::cmd_bake(scene_path, out_dir, frames, resume, g);
   if (*diff) return cli::cmd_diff(cache_a, cache_b, diff_options, g);
   if (*check) return cli::cmd_check(scene_path, g);

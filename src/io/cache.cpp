@@ -418,6 +418,11 @@ std::string CacheReader::attribute(const std::string& name) const {
   return h5::read_attr_string(p.id(), name);
 }
 
+std::vector<double> CacheReader::parameter_doubles(const std::string& name) const {
+  Handle p(h5::check_id(H5Gopen2(file(), "parameters", H5P_DEFAULT), "parameters"));
+  return h5::read_attr_doubles(p.id(), name);
+}
+
 std::vector<Vec3> CacheReader::centers_of_mass() const {
   const std::vector<double> c = h5::read_doubles(file(), "bodies/center_of_mass");
   std::vector<Vec3> out;
@@ -469,7 +474,7 @@ sim::SimState CacheReader::sim_state(int index, const scene::Scene& sc) const {
   return s;
 }
 
-magnetics::Model CacheReader::model() const {
+magnetics::Model CacheReader::model(std::vector<int>* induced_order) const {
   const hid_t f = file();
   magnetics::CellTable cells;
   magnetics::PartTable parts;
@@ -496,7 +501,16 @@ magnetics::Model CacheReader::model() const {
   parts.magnetization = v3(h5::read_doubles(f, "magnetics/parts/magnetization"));
   parts.half = v3(h5::read_doubles(f, "magnetics/parts/half"));
   parts.chi = h5::read_doubles(f, "magnetics/parts/chi");
-  return magnetics::model_from_cells(static_cast<int>(names_.size()), cells, parts);
+  std::vector<int> order;
+  magnetics::Model m = magnetics::model_from_cells(static_cast<int>(names_.size()), cells, parts, 32, &order);
+  if (induced_order) {
+    const std::vector<std::int64_t> stored = h5::read_ints(f, "magnetics/induced_cells");
+    std::vector<int> rank_of(cells.size(), -1);
+    for (std::size_t r = 0; r < stored.size(); ++r) rank_of[stored[r]] = static_cast<int>(r);
+    induced_order->clear();
+    for (int c : m.induced_cells) induced_order->push_back(rank_of[order[c]]);
+  }
+  return m;
 }
 
 }  // namespace magbake::io

@@ -73,13 +73,16 @@ class CacheReader {
   std::string scene_text() const;
   std::string scene_hash() const;
   std::string attribute(const std::string& name) const;  ///< a /parameters string attribute
+  std::vector<double> parameter_doubles(const std::string& name) const;  ///< a /parameters numeric attribute
   std::vector<Vec3> centers_of_mass() const;             ///< body frame
 
   CacheFrame frame(int index) const;                   ///< 0-based index of a completed frame
   /// The simulation state of a stored frame (for --resume), given the scene's bodies.
   sim::SimState sim_state(int index, const scene::Scene& scene) const;
-  /// The magnetic model (cells and hierarchies) rebuilt from the stored cells.
-  magnetics::Model model() const;
+  /// The magnetic model (cells and hierarchies) rebuilt from the stored cells. If given,
+  /// induced_order[k] receives the stored rank of the model's k-th induced cell (the order of
+  /// CacheFrame::induced_moment), so frames' moments can be reordered for the model.
+  magnetics::Model model(std::vector<int>* induced_order = nullptr) const;
 
   hid_t file() const;
 

@@ -75,7 +75,7 @@ std::size_t write_field_volume(const std::string& path, const FieldSamples& s, c
   const std::string tmp = path + ".tmp" + std::to_string(::getpid());
   try {
     openvdb::io::File file(tmp);
-    file.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
+    file.setCompression(openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK);
     file.write(grids, file_meta);
     file.close();
   } catch (const std::exception& e) {

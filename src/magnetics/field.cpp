@@ -8,6 +8,10 @@
 #include "dipole.h"
 #include "parallel.h"
 
+#if defined(__AVX2__) && defined(__FMA__)
+#include <immintrin.h>
+#endif
+
 namespace magbake::magnetics {
 
 void Sources::aggregate(const Model& m) {
@@ -119,18 +123,90 @@ void Targets::update_induced_positions(const Model& m, const State& s) {
   compute_group_bounds(*this);
 }
 
+namespace {
+
+// A dipole source for one target group: position relative to the group centre (m), moment.
+struct Source {
+  Vec3 x, m;
+};
+
+#if defined(__AVX2__) && defined(__FMA__)
+// B of every source at targets [tb, te) (positions relative to the group centre), added to B.
+// Targets in 8 lanes, sources broadcast; float, accumulated per target, then added in double.
+void dipoles_f32(const std::vector<Source>& src, const std::vector<Vec3>& rel, int n, Vec3* B) {
+  constexpr int kLanes = 8;
+  alignas(32) float tx[kLanes], ty[kLanes], tz[kLanes], ox[kLanes], oy[kLanes], oz[kLanes];
+  std::vector<float> sx(src.size()), sy(src.size()), sz(src.size()), mx(src.size()), my(src.size()), mz(src.size());
+  for (std::size_t i = 0; i < src.size(); ++i) {
+    sx[i] = float(src[i].x[0]), sy[i] = float(src[i].x[1]), sz[i] = float(src[i].x[2]);
+    mx[i] = float(src[i].m[0]), my[i] = float(src[i].m[1]), mz[i] = float(src[i].m[2]);
+  }
+  for (int q0 = 0; q0 < n; q0 += kLanes) {
+    for (int l = 0; l < kLanes; ++l) {
+      const bool in = q0 + l < n;
+      tx[l] = in ? float(rel[q0 + l][0]) : 1e6f;
+      ty[l] = in ? float(rel[q0 + l][1]) : 1e6f;
+      tz[l] = in ? float(rel[q0 + l][2]) : 1e6f;
+    }
+    const __m256 X = _mm256_load_ps(tx), Y = _mm256_load_ps(ty), Z = _mm256_load_ps(tz);
+    __m256 BX = _mm256_setzero_ps(), BY = BX, BZ = BX;
+    for (std::size_t i = 0; i < src.size(); ++i) {
+      const __m256 rx = _mm256_sub_ps(X, _mm256_set1_ps(sx[i]));
+      const __m256 ry = _mm256_sub_ps(Y, _mm256_set1_ps(sy[i]));
+      const __m256 rz = _mm256_sub_ps(Z, _mm256_set1_ps(sz[i]));
+      const __m256 d2 = _mm256_fmadd_ps(rz, rz, _mm256_fmadd_ps(ry, ry, _mm256_mul_ps(rx, rx)));
+      const __m256 y = _mm256_rsqrt_ps(d2);
+      const __m256 z = _mm256_mul_ps(y, _mm256_fnmadd_ps(d2, _mm256_mul_ps(y, y), _mm256_set1_ps(3.0f)));  // 2/d
+      const __m256 z2 = _mm256_mul_ps(z, z);
+      const __m256 z5 = _mm256_mul_ps(_mm256_mul_ps(z2, z2), z);  // 32/d^5
+      const __m256 bmx = _mm256_set1_ps(mx[i]), bmy = _mm256_set1_ps(my[i]), bmz = _mm256_set1_ps(mz[i]);
+      const __m256 mr = _mm256_fmadd_ps(bmz, rz, _mm256_fmadd_ps(bmy, ry, _mm256_mul_ps(bmx, rx)));
+      const __m256 a = _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(3.0f), mr), z5);
+      const __m256 c = _mm256_mul_ps(d2, z5);
+      BX = _mm256_add_ps(BX, _mm256_fmsub_ps(a, rx, _mm256_mul_ps(c, bmx)));
+      BY = _mm256_add_ps(BY, _mm256_fmsub_ps(a, ry, _mm256_mul_ps(c, bmy)));
+      BZ = _mm256_add_ps(BZ, _mm256_fmsub_ps(a, rz, _mm256_mul_ps(c, bmz)));
+    }
+    _mm256_store_ps(ox, BX), _mm256_store_ps(oy, BY), _mm256_store_ps(oz, BZ);
+    for (int l = 0; l < kLanes && q0 + l < n; ++l) {
+      B[q0 + l] += (kMu0Over4Pi / 32.0) * Vec3(ox[l], oy[l], oz[l]);
+    }
+  }
+}
+#else
+void dipoles_f32(const std::vector<Source>& src, const std::vector<Vec3>& rel, int n, Vec3* B) {
+  for (int q = 0; q < n; ++q) {
+    Eigen::Vector3f acc = Eigen::Vector3f::Zero();
+    for (const Source& s : src) {
+      const Eigen::Vector3f r = (rel[q] - s.x).cast<float>();
+      const Eigen::Vector3f m = s.m.cast<float>();
+      const float d2 = r.squaredNorm(), inv = 1.0f / std::sqrt(d2), inv5 = inv * inv * inv * inv * inv;
+      acc += inv5 * (3.0f * m.dot(r) * r - d2 * m);
+    }
+    B[q] += kMu0Over4Pi * acc.cast<double>();
+  }
+}
+#endif
+
+}  // namespace
+
 std::int64_t field_at_targets(const Model& m, const State& s, const Sources& src, const Targets& t,
                               const FieldOptions& opt, std::span<Vec3> B) {
   const int ngroup = static_cast<int>(t.group_begin.size()) - 1;
   assert(B.size() == t.position.size());
   std::vector<std::int64_t> work(std::max(ngroup, 0), 0);
 
-  parallel_for_each(ngroup, 4, [&](int g) {
+  parallel_for_each(ngroup, 1, [&](int g) {
     const int tb = t.group_begin[g], te = t.group_begin[g + 1];
     for (int q = tb; q < te; ++q) B[q] = Vec3::Zero();
     const Vec3 gc = t.group_center[g];
     const double gr = t.group_radius[g];
     std::int64_t count = 0;
+    thread_local std::vector<Source> far;   // dipoles evaluated for every target of the group
+    thread_local std::vector<int> near;     // cells decided target by target
+    thread_local std::vector<Vec3> rel;
+    far.clear();
+    near.clear();
     int stack[128];
     for (int body = 0; body < m.body_count; ++body) {
       const int root = m.body_root[body];
@@ -146,10 +222,7 @@ std::int64_t field_at_targets(const Model& m, const State& s, const Sources& src
         const double rn = m.node_radius[n];
         const double near_margin = opt.near_field * 2.0 * m.node_reach[n];
         if (rn + gr < opt.theta * d && d - rn - gr > near_margin) {
-          // Far: the node acts as one dipole at its centre.
-          const Vec3 mn = src.node[n];
-          for (int q = tb; q < te; ++q) B[q] += dipole_field(t.position[q] - nc, mn);
-          count += te - tb;
+          far.push_back({nc - gc, src.node[n]});  // the node acts as one dipole at its centre
           continue;
         }
         const int ch = m.node_child[n];
@@ -158,26 +231,59 @@ std::int64_t field_at_targets(const Model& m, const State& s, const Sources& src
           for (int k = ch + m.node_nchild[n] - 1; k >= ch; --k) stack[top++] = k;
           continue;
         }
-        // Leaf: every cell, point dipoles, exact cuboids where near.
+        // Leaf: cells that may be near some target are decided per target; the rest are dipoles.
         for (int c = m.node_begin[n]; c < m.node_end[n]; ++c) {
-          const Vec3 mc = src.cell[c];
+          const Vec3& mc = src.cell[c];
           if (mc.squaredNorm() == 0.0) continue;
           const Vec3 xc = origin + s.cell_offset[c];
-          const double lim = opt.near_field * 2.0 * m.cell_half[c].maxCoeff();
-          const Vec3 cc = origin + s.body_rotation[body] * m.cell_center[c];
-          for (int q = tb; q < te; ++q) {
-            if (t.cell[q] == c) continue;
-            if (opt.near_field > 0.0 && m.cell_full[c] && (t.position[q] - cc).squaredNorm() < lim * lim) {
-              // Near a full cell: the exact field of its cuboid.
-              const Mat3& R = s.part_rotation[m.cell_part[c]];
-              const double vol = 8.0 * m.cell_half[c].prod();
-              B[q] += R * cuboid_b_field(m.cell_half[c], R.transpose() * mc / vol, R.transpose() * (t.position[q] - cc));
-            } else {
-              const Vec3 r = t.position[q] - xc;
-              if (r.squaredNorm() > 0.0) B[q] += dipole_field(r, mc);
-            }
+          const double lim = std::max(opt.near_field * 2.0 * m.cell_half[c].maxCoeff(), opt.smear_inside ? m.cell_reach[c] : 0.0);
+          const bool maybe_near = (xc - gc).norm() - gr < lim + m.cell_reach[c];
+          const bool self = t.cell[tb] >= 0;  // targets that are cells skip themselves
+          if (maybe_near || self || !opt.single_precision) {
+            near.push_back(c);
+          } else {
+            far.push_back({xc - gc, mc});
           }
-          count += te - tb;
+        }
+      }
+    }
+    const int n = te - tb;
+    count += std::int64_t(far.size() + near.size()) * n;
+    // Far nodes and plain leaf dipoles.
+    if (opt.single_precision) {
+      rel.resize(n);
+      for (int q = 0; q < n; ++q) rel[q] = t.position[tb + q] - gc;
+      dipoles_f32(far, rel, n, B.data() + tb);
+    } else {
+      for (const Source& f : far) {
+        for (int q = tb; q < te; ++q) B[q] += dipole_field(t.position[q] - gc - f.x, f.m);
+      }
+    }
+    // Near cells, target by target, in double: exact cuboids, smeared cuboids inside, dipoles.
+    for (int c : near) {
+      const int body = m.cell_body[c];
+      const Vec3 origin = s.body_pose[body].position;
+      const Vec3& mc = src.cell[c];
+      const Vec3 xc = origin + s.cell_offset[c];
+      const Vec3 cc = origin + s.body_rotation[body] * m.cell_center[c];
+      const Mat3& R = s.part_rotation[m.cell_part[c]];
+      const Vec3& h = m.cell_half[c];
+      const double lim = opt.near_field * 2.0 * h.maxCoeff();
+      for (int q = tb; q < te; ++q) {
+        if (t.cell[q] == c) continue;
+        const Vec3 rc = t.position[q] - cc;
+        bool cuboid = opt.near_field > 0.0 && m.cell_full[c] && rc.squaredNorm() < lim * lim;
+        if (!cuboid && opt.smear_inside) {
+          const Vec3 local = R.transpose() * rc;
+          cuboid = (local.cwiseAbs() - h).maxCoeff() <= 0.0;
+        }
+        if (cuboid) {
+          // The cell's cuboid with its moment smeared over it (exact for full cells).
+          const double vol = 8.0 * h.prod();
+          B[q] += R * cuboid_b_field(h, R.transpose() * mc / vol, R.transpose() * rc);
+        } else {
+          const Vec3 r = t.position[q] - xc;
+          if (r.squaredNorm() > 0.0) B[q] += dipole_field(r, mc);
         }
       }
     }

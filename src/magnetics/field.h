@@ -13,6 +13,12 @@ namespace magbake::magnetics {
 struct FieldOptions {
   double theta = 0.5;       ///< opening angle (0 = every cell)
   double near_field = 0.0;  ///< exact cuboid field within this many cell sizes of full cells (0 = off)
+  /// Targets inside a cell's cuboid get that cuboid's field with the cell's moment smeared over
+  /// it (mu0 (H + M) inside): bounded inside magnets, where a point dipole is singular.
+  bool smear_inside = false;
+  /// Far and leaf dipoles in single precision (AVX2, 8 targets per instruction); near cells,
+  /// sums and everything else in double. Targets must not be cells (no self-exclusion).
+  bool single_precision = false;
 };
 
 /// B (tesla, world) of `sources` at every target, in target order (B has targets.position.size()

@@ -37,11 +37,45 @@ struct Targets {
 
   /// Groups arbitrary points by recursive bisection (at most `group_size` per group).
   static Targets from_points(std::span<const Vec3> points, int group_size = 32);
+  /// Voxel centres origin + (i, j, k) * voxel of an nx x ny x nz grid, grouped in blocks of
+  /// block³ voxels; original[] holds the grid index (k * ny + j) * nx + i. Blocks for which
+  /// keep(block_min, block_max) is false are left out.
+  template <class Keep>
+  static Targets from_grid(const Vec3& origin, double voxel, const Eigen::Vector3i& dims, int block, Keep keep);
   /// Targets at the induced cells of the model (groups = hierarchy leaves), world positions from `s`.
   static Targets from_induced_cells(const Model& model, const State& s);
   /// Recomputes positions and group bounds of targets made by from_induced_cells.
   void update_induced_positions(const Model& model, const State& s);
 };
+
+template <class Keep>
+Targets Targets::from_grid(const Vec3& origin, double voxel, const Eigen::Vector3i& dims, int block, Keep keep) {
+  Targets t;
+  t.group_begin.push_back(0);
+  for (int bk = 0; bk < dims[2]; bk += block) {
+    for (int bj = 0; bj < dims[1]; bj += block) {
+      for (int bi = 0; bi < dims[0]; bi += block) {
+        const Eigen::Vector3i hi(std::min(bi + block, dims[0]), std::min(bj + block, dims[1]), std::min(bk + block, dims[2]));
+        const Vec3 lo_p = origin + voxel * Vec3(bi, bj, bk), hi_p = origin + voxel * (hi.cast<double>() - Vec3::Ones());
+        if (!keep(lo_p, hi_p)) continue;
+        for (int k = bk; k < hi[2]; ++k) {
+          for (int j = bj; j < hi[1]; ++j) {
+            for (int i = bi; i < hi[0]; ++i) {
+              t.position.push_back(origin + voxel * Vec3(i, j, k));
+              t.cell.push_back(-1);
+              t.original.push_back((k * dims[1] + j) * dims[0] + i);
+            }
+          }
+        }
+        t.group_begin.push_back(static_cast<int>(t.position.size()));
+        const Vec3 c = 0.5 * (lo_p + hi_p);
+        t.group_center.push_back(c);
+        t.group_radius.push_back((hi_p - c).norm());
+      }
+    }
+  }
+  return t;
+}
 
 /// Per-evaluation state of the magnetics. Set body_pose, then call evaluate().
 struct State {

@@ -26,6 +26,33 @@ void State::resize(const Model& m) {
   induced_targets = Targets{};
 }
 
+namespace {
+// World geometry and permanent moments of every cell and node.
+void update_geometry(const Model& m, State& s) {
+  for (int b = 0; b < m.body_count; ++b) s.body_rotation[b] = s.body_pose[b].rotation.normalized().toRotationMatrix();
+  for (std::size_t p = 0; p < m.part_body.size(); ++p) s.part_rotation[p] = s.body_rotation[m.part_body[p]] * m.part_rotation[p];
+  parallel_for_each(m.cell_count(), 4096, [&](int c) {
+    const Mat3& R = s.body_rotation[m.cell_body[c]];
+    s.cell_offset[c] = R * m.cell_position[c];
+    s.permanent.cell[c] = R * m.cell_moment[c];
+  });
+  for (int n = 0; n < m.node_count(); ++n) s.node_offset[n] = s.body_rotation[m.node_body[n]] * m.node_center[n];
+  s.permanent.aggregate(m);
+}
+}  // namespace
+
+void place(const Model& m, State& s, const std::vector<Vec3>& induced) {
+  if (m.empty()) return;
+  if (s.cell_offset.size() != static_cast<std::size_t>(m.cell_count())) s.resize(m);
+  update_geometry(m, s);
+  s.total.cell = s.permanent.cell;
+  if (induced.size() == m.induced_cells.size()) {
+    s.induced_moment = induced;
+    for (std::size_t q = 0; q < m.induced_cells.size(); ++q) s.total.cell[m.induced_cells[q]] += induced[q];
+  }
+  s.total.aggregate(m);
+}
+
 void evaluate(const Model& m, const Settings& st, State& s, Result& res) {
   res.force.assign(m.body_count, Vec3::Zero());
   res.torque.assign(m.body_count, Vec3::Zero());
@@ -40,15 +67,7 @@ void evaluate(const Model& m, const Settings& st, State& s, Result& res) {
   }
 
   // 1. World geometry and permanent moments.
-  for (int b = 0; b < m.body_count; ++b) s.body_rotation[b] = s.body_pose[b].rotation.normalized().toRotationMatrix();
-  for (std::size_t p = 0; p < m.part_body.size(); ++p) s.part_rotation[p] = s.body_rotation[m.part_body[p]] * m.part_rotation[p];
-  parallel_for_each(m.cell_count(), 4096, [&](int c) {
-    const Mat3& R = s.body_rotation[m.cell_body[c]];
-    s.cell_offset[c] = R * m.cell_position[c];
-    s.permanent.cell[c] = R * m.cell_moment[c];
-  });
-  for (int n = 0; n < m.node_count(); ++n) s.node_offset[n] = s.body_rotation[m.node_body[n]] * m.node_center[n];
-  s.permanent.aggregate(m);
+  update_geometry(m, s);
 
   // 2. Induced moments (only when the scene has induced cells).
   s.total.cell = s.permanent.cell;

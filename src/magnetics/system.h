@@ -18,6 +18,11 @@ namespace magbake::magnetics {
 /// is skipped: no cells -> nothing; no induced cells -> no solve; non-magnetized pairs -> skipped.
 void evaluate(const Model& model, const Settings& settings, State& s, Result& result);
 
+/// Places the model at s.body_pose with given induced moments (Model::induced_cells order,
+/// world) instead of solving for them: what field export from a cache needs. After it,
+/// field_at_points() and field_at_targets() with s.total work as after evaluate().
+void place(const Model& model, State& s, const std::vector<Vec3>& induced_moments);
+
 /// Flux density B (tesla, world) at world points (m) from every cell's total moment after
 /// evaluate(), plus the applied field. Cells within settings.near_field cell sizes of a point
 /// contribute their exact cuboid field (so points inside magnets get mu0 (H + M)).

@@ -126,6 +126,69 @@ ShapeDesc shape(Ctx& c, const ShapeSpec& s, const std::string& path) {
   return out;
 }
 
+// outputs.field and outputs.preview in SI units (shared with outputs_of_text: farm nodes read
+// them from a cache's scene text without loading its meshes).
+void read_outputs(const SceneSpec& s, double L, double A, Diagnostics& d, std::optional<FieldOutput>& field,
+                  std::optional<PreviewOutput>& preview) {
+  Ctx c{d, L, A, {}};
+  if (s.field_set) {
+    FieldOutput f;
+    f.path = s.field_path.v;
+    if (s.field_voxel.set && positive(c, s.field_voxel, "outputs.field.voxel")) f.voxel = s.field_voxel.v * L;
+    if (s.field_margin.set) {
+      if (!(s.field_margin.v >= 0)) d.add(s.field_margin.loc, "outputs.field.margin", "must be >= 0");
+      else f.margin = s.field_margin.v * L;
+    }
+    if (s.field_every.set) {
+      if (!(s.field_every.v >= 1) || s.field_every.v != std::floor(s.field_every.v)) {
+        d.add(s.field_every.loc, "outputs.field.every", "must be a whole number >= 1");
+      } else {
+        f.every = int(s.field_every.v);
+      }
+    }
+    if (s.field_bounds_auto.set && s.field_bounds_auto.v != "auto") {
+      d.add(s.field_bounds_auto.loc, "outputs.field.bounds", "expected 'auto' or [[xmin, ymin, zmin], [xmax, ymax, zmax]]");
+    }
+    if (s.field_bounds.set) {
+      f.auto_bounds = false;
+      f.bounds_min = Vec3(s.field_bounds.v[0][0], s.field_bounds.v[0][1], s.field_bounds.v[0][2]) * L;
+      f.bounds_max = Vec3(s.field_bounds.v[1][0], s.field_bounds.v[1][1], s.field_bounds.v[1][2]) * L;
+      if (!(f.bounds_min.array() < f.bounds_max.array()).all()) {
+        d.add(s.field_bounds.loc, "outputs.field.bounds", "every minimum must be below its maximum");
+      }
+    }
+    field = f;
+  }
+  if (s.preview_set) {
+    PreviewOutput p;
+    p.path = s.preview_path.v;
+    if (s.preview_size.set) {
+      const double w = s.preview_size.v[0], h = s.preview_size.v[1];
+      if (!(w >= 16 && h >= 16 && w <= 16384 && h <= 16384) || w != std::floor(w) || h != std::floor(h)) {
+        d.add(s.preview_size.loc, "outputs.preview.size", "expected [width, height] in pixels, 16 to 16384");
+      } else {
+        p.width = int(w), p.height = int(h);
+      }
+    }
+    if (s.field_lines.set) p.field_lines = s.field_lines.v;
+    if (s.camera.set && s.camera.position.set && s.camera.look_at.set) {
+      Camera cam;
+      cam.position = vec3(s.camera.position, L);
+      cam.look_at = vec3(s.camera.look_at, L);
+      if (s.camera.fov.set) {
+        const double fov = s.camera.fov.v * A;
+        if (!(fov > 0 && fov < kPi)) d.add(s.camera.fov.loc, "outputs.preview.camera.fov", "must be between 0 and 180 degrees");
+        else cam.fov = fov;
+      }
+      if ((cam.position - cam.look_at).norm() == 0) {
+        d.add(s.camera.loc, "outputs.preview.camera", "position and look_at must differ");
+      }
+      p.camera = cam;
+    }
+    preview = p;
+  }
+}
+
 }  // namespace
 
 std::string ShapeDesc::describe() const {
@@ -426,63 +489,18 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
 
   // Outputs.
   if (s.cache.set) sc.cache = s.cache.v;
-  if (s.field_set) {
-    FieldOutput f;
-    f.path = s.field_path.v;
-    if (s.field_voxel.set && positive(c, s.field_voxel, "outputs.field.voxel")) f.voxel = s.field_voxel.v * c.L;
-    if (s.field_margin.set) {
-      if (!(s.field_margin.v >= 0)) d.add(s.field_margin.loc, "outputs.field.margin", "must be >= 0");
-      else f.margin = s.field_margin.v * c.L;
-    }
-    if (s.field_every.set) {
-      if (!(s.field_every.v >= 1) || s.field_every.v != std::floor(s.field_every.v)) {
-        d.add(s.field_every.loc, "outputs.field.every", "must be a whole number >= 1");
-      } else {
-        f.every = int(s.field_every.v);
-      }
-    }
-    if (s.field_bounds_auto.set && s.field_bounds_auto.v != "auto") {
-      d.add(s.field_bounds_auto.loc, "outputs.field.bounds", "expected 'auto' or [[xmin, ymin, zmin], [xmax, ymax, zmax]]");
-    }
-    if (s.field_bounds.set) {
-      f.auto_bounds = false;
-      f.bounds_min = Vec3(s.field_bounds.v[0][0], s.field_bounds.v[0][1], s.field_bounds.v[0][2]) * c.L;
-      f.bounds_max = Vec3(s.field_bounds.v[1][0], s.field_bounds.v[1][1], s.field_bounds.v[1][2]) * c.L;
-      if (!(f.bounds_min.array() < f.bounds_max.array()).all()) {
-        d.add(s.field_bounds.loc, "outputs.field.bounds", "every minimum must be below its maximum");
-      }
-    }
-    sc.field = f;
-  }
-  if (s.preview_set) {
-    PreviewOutput p;
-    p.path = s.preview_path.v;
-    if (s.preview_size.set) {
-      const double w = s.preview_size.v[0], h = s.preview_size.v[1];
-      if (!(w >= 16 && h >= 16 && w <= 16384 && h <= 16384) || w != std::floor(w) || h != std::floor(h)) {
-        d.add(s.preview_size.loc, "outputs.preview.size", "expected [width, height] in pixels, 16 to 16384");
-      } else {
-        p.width = int(w), p.height = int(h);
-      }
-    }
-    if (s.field_lines.set) p.field_lines = s.field_lines.v;
-    if (s.camera.set && s.camera.position.set && s.camera.look_at.set) {
-      Camera cam;
-      cam.position = vec3(s.camera.position, c.L);
-      cam.look_at = vec3(s.camera.look_at, c.L);
-      if (s.camera.fov.set) {
-        const double fov = s.camera.fov.v * c.A;
-        if (!(fov > 0 && fov < kPi)) d.add(s.camera.fov.loc, "outputs.preview.camera.fov", "must be between 0 and 180 degrees");
-        else cam.fov = fov;
-      }
-      if ((cam.position - cam.look_at).norm() == 0) {
-        d.add(s.camera.loc, "outputs.preview.camera", "position and look_at must differ");
-      }
-      p.camera = cam;
-    }
-    sc.preview = p;
-  }
+  read_outputs(s, c.L, c.A, d, sc.field, sc.preview);
   return sc;
+}
+
+void outputs_of_text(const std::string& text, std::optional<FieldOutput>& field, std::optional<PreviewOutput>& preview) {
+  Diagnostics d("scene");
+  const SceneSpec s = parse_scene_text(text, "scene", d);
+  double L = 1, A = 1;
+  if (s.length_unit.v == "cm") L = 0.01;
+  if (s.length_unit.v == "mm") L = 0.001;
+  if (s.angle_unit.v == "deg") A = kPi / 180;
+  read_outputs(s, L, A, d, field, preview);
 }
 
 Scene load_scene_text(const std::string& text, const std::string& file) {

@@ -1,0 +1,39 @@
+// Field export shared by `magbake field` and `magbake bake` (outputs.field).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "cli.h"
+#include "io/field_volume.h"
+#include "magnetics/system.h"
+
+namespace magbake::cli {
+
+/// What to export; unset values come from the cache's outputs.field, then from defaults.
+struct FieldRequest {
+  std::optional<std::pair<int, int>> frames;  ///< inclusive
+  std::string pattern;                        ///< "" = outputs.field.path or <cache>.####.vdb
+  std::optional<double> voxel;                ///< m
+  std::optional<magnetics::Box3> bounds;      ///< world, m
+  std::optional<double> margin;               ///< m (auto bounds)
+  std::optional<int> every;
+  double threshold = 1e-5;                    ///< T: fainter voxels stay inactive
+  double theta = 0.25;                        ///< tree opening angle (error bound, see docs)
+  double max_voxels = 6e7;                    ///< capacity guard
+};
+
+/// "name.####.vdb" / "name.%04d.vdb" with a frame number.
+std::string expand_pattern(const std::string& pattern, int frame);
+
+/// B at every voxel centre of `samples` (origin, voxel, dims set): the model placed in `s`
+/// plus the applied field. Blocks of voxels whose field is provably below `threshold` (sum
+/// over bodies of 2 mu0/4pi sum|m| / distance³) are skipped and left NaN.
+void evaluate_field_grid(const magnetics::Model& model, const magnetics::State& s, const magnetics::FieldOptions& opt,
+                         const magnetics::Vec3& applied, double threshold, io::FieldSamples& samples);
+
+/// Writes the field volumes of a cache. Exit code (0 ok, 1 failure, 2 bad input, 75 interrupted).
+int export_field(const std::string& cache_path, const FieldRequest& request, const Global& g);
+
+}  // namespace magbake::cli
