@@ -9,6 +9,7 @@
 
 #include "cli.h"
 #include "field_export.h"
+#include "preview_export.h"
 #include "io/cache.h"
 #include "progress.h"
 #include "scene/scene_magnetics.h"
@@ -145,7 +146,6 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
     return kFailure;
   }
 
-  if (s.preview) spdlog::warn("outputs.preview is set, but previews are not produced by this version yet");
 
   Progress progress("bake " + s.name, last - first + 1, g.quiet);
   const auto t0 = std::chrono::steady_clock::now();
@@ -229,6 +229,13 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
     req.frames = std::make_pair(first, last);
     if (!out_dir.empty()) req.pattern = (fs::path(out_dir) / fs::path(s.field->path).filename()).string();
     const int rc = export_field(cache.string(), req, g);
+    if (rc != kOk) return rc;
+  }
+  if (s.preview) {
+    PreviewRequest req;
+    req.frames = std::make_pair(first, last);
+    if (!out_dir.empty()) req.pattern = (fs::path(out_dir) / fs::path(s.preview->path).filename()).string();
+    const int rc = export_preview(cache.string(), req, g);
     if (rc != kOk) return rc;
   }
   return kOk;

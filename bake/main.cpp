@@ -9,6 +9,7 @@
 
 #include "cli.h"
 #include "field_export.h"
+#include "preview_export.h"
 #include "progress.h"
 #include "io/h5.h"
 #include "geometry/shapes.h"
@@ -49,6 +50,7 @@ int main(int argc, char** argv) {
   io::h5::no_atexit();
   CLI::App app{"magbake - baker for magnetic rigid-body shots (scene -> HDF5 cache, field volumes, previews)"};
   app.require_subcommand(1);
+  app.fallthrough();  // global options (--threads, -q, -v) also work after the subcommand
   cli::Global g;
   app.add_option("--threads", g.threads, "worker threads (0 = all cores)")->capture_default_str();
   app.add_flag("-q,--quiet", g.quiet, "only warnings and errors on stderr");
@@ -88,6 +90,19 @@ int main(int argc, char** argv) {
   field->add_option("--margin", field_margin, "margin around the magnetic bodies for auto bounds, metres");
   field->add_option("--threshold", field_req.threshold, "voxels with |B| below this (tesla) stay inactive")->capture_default_str();
   field->add_option("--theta", field_req.theta, "tree opening angle (accuracy, see docs)")->capture_default_str();
+
+  std::string preview_cache, preview_frames, preview_size;
+  cli::PreviewRequest preview_req;
+  bool lines_on = false, lines_off = false;
+  auto* preview = app.add_subcommand("preview", "PNG preview frames of a cache (offscreen OpenGL)");
+  preview->add_option("cache", preview_cache, "cache (.h5)")->required();
+  preview->add_option("--frames", preview_frames, "frame range A-B (default: every frame)");
+  preview->add_option("-o,--output", preview_req.pattern, "file pattern, e.g. out/preview.####.png");
+  preview->add_option("--size", preview_size, "image size WxH (default: outputs.preview.size or 960x540)");
+  preview->add_flag("--field-lines", lines_on, "draw field lines (streamlines of B)");
+  preview->add_flag("--no-field-lines", lines_off, "no field lines");
+  preview->add_flag("--auto-camera", preview_req.auto_camera, "frame the shot automatically, ignoring the scene's camera");
+  preview->add_option("--contact-sheet", preview_req.contact_sheet, "also write all frames tiled into this PNG");
 
   auto* check = app.add_subcommand("check", "validate a scene and print a one-screen summary with its cost (exit 0/2)");
   check->add_option("scene", scene_path, "scene file (YAML)")->required();
@@ -153,6 +168,25 @@ int main(int argc, char** argv) {
     }
     cli::install_interrupt_handlers();
     return cli::export_field(field_cache, field_req, g);
+  }
+  if (*preview) {
+    if (!preview_frames.empty()) {
+      int fa, fb;
+      if (!cli::parse_range(preview_frames, fa, fb)) {
+        spdlog::error("--frames expects A-B, got '{}'", preview_frames);
+        return cli::kUsage;
+      }
+      preview_req.frames = std::make_pair(fa, fb);
+    }
+    if (!preview_size.empty() &&
+        std::sscanf(preview_size.c_str(), "%dx%d", &preview_req.width, &preview_req.height) != 2) {
+      spdlog::error("--size expects WxH, got '{}'", preview_size);
+      return cli::kUsage;
+    }
+    if (lines_on) preview_req.field_lines = true;
+    if (lines_off) preview_req.field_lines = false;
+    cli::install_interrupt_handlers();
+    return cli::export_preview(preview_cache, preview_req, g);
   }
   if (*bake) return cli::cmd_bake(scene_path, out_dir, frames, resume, g);
   if (*diff) return cli::cmd_diff(cache_a, cache_b, diff_options, g);

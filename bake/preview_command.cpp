@@ -1,0 +1,381 @@
+// magbake preview: PNG frames of a cache, rendered offscreen (OSMesa), with optional field lines.
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+
+#include "field_export.h"
+#include "gl_context.h"
+#include "io/cache.h"
+#include "magnetics/system.h"
+#include "png_file.h"
+#include "preview_export.h"
+#include "progress.h"
+#include "renderer.h"
+
+namespace magbake::cli {
+namespace fs = std::filesystem;
+using magnetics::Vec3;
+using render::Vec3f;
+
+namespace {
+
+// Material colours (linear RGB): permanent magnets red (north half) and blue (south half), as in
+// the paper's figures; soft iron grey; other linear materials copper; superconductors pale cyan;
+// non-magnetic bodies warm white.
+Vec3f material_color(const std::string& kind, bool north) {
+  if (kind == "permanent") return north ? Vec3f(0.75f, 0.08f, 0.06f) : Vec3f(0.08f, 0.20f, 0.72f);
+  if (kind == "soft") return Vec3f(0.42f, 0.44f, 0.47f);
+  if (kind == "linear") return Vec3f(0.72f, 0.38f, 0.16f);
+  if (kind == "superconductor") return Vec3f(0.45f, 0.80f, 0.85f);
+  return Vec3f(0.78f, 0.74f, 0.64f);
+}
+
+// |B| -> colour for field lines: a log scale from deep violet (10 µT) through teal to yellow (1 T),
+// distinct from every material colour.
+Vec3f field_color(double b) {
+  const double t = std::clamp((std::log10(std::max(b, 1e-12)) + 5.0) / 5.0, 0.0, 1.0);
+  const Vec3f a(0.35f, 0.05f, 0.55f), m(0.0f, 0.62f, 0.58f), c(1.0f, 0.86f, 0.0f);
+  return t < 0.5 ? Vec3f(a + (m - a) * float(2 * t)) : Vec3f(m + (c - m) * float(2 * t - 1));
+}
+
+struct ShotGeometry {
+  std::vector<render::Mesh> meshes;
+  std::vector<std::vector<Vec3>> body_points;  // body-frame vertices of every body (framing)
+};
+
+ShotGeometry load_geometry(const io::CacheReader& cache) {
+  const hid_t f = cache.file();
+  const auto verts = io::h5::read_doubles(f, "geometry/vertices");
+  const auto tris = io::h5::read_ints(f, "geometry/triangles");
+  const auto body = io::h5::read_ints(f, "geometry/submesh_body");
+  const auto vb = io::h5::read_ints(f, "geometry/submesh_vertex_begin");
+  const auto vc = io::h5::read_ints(f, "geometry/submesh_vertex_count");
+  const auto tb = io::h5::read_ints(f, "geometry/submesh_triangle_begin");
+  const auto tc = io::h5::read_ints(f, "geometry/submesh_triangle_count");
+  const auto kind = io::h5::read_strings(f, "geometry/submesh_material_kind");
+  const auto mag = io::h5::read_doubles(f, "geometry/submesh_magnetization");
+  const auto role = io::h5::read_strings(f, "geometry/submesh_role");
+  // A body with inserts is drawn as a translucent casing so its magnets show through.
+  std::vector<bool> has_parts(cache.body_names().size(), false);
+  for (std::size_t s = 0; s < body.size(); ++s) {
+    if (role[s] == "part") has_parts[body[s]] = true;
+  }
+  ShotGeometry g;
+  g.body_points.resize(cache.body_names().size());
+  auto vertex = [&](std::int64_t v) { return Vec3(verts[3 * v], verts[3 * v + 1], verts[3 * v + 2]); };
+  for (std::size_t s = 0; s < body.size(); ++s) {
+    render::Mesh m;
+    m.body = static_cast<int>(body[s]);
+    if (role[s] == "body" && has_parts[m.body] && kind[s] == "none") m.alpha = 0.35f;
+    Vec3 centre = Vec3::Zero();
+    for (std::int64_t v = vb[s]; v < vb[s] + vc[s]; ++v) {
+      centre += vertex(v);
+      g.body_points[m.body].push_back(vertex(v));
+    }
+    centre /= double(std::max<std::int64_t>(vc[s], 1));
+    const Vec3 dir(mag[3 * s], mag[3 * s + 1], mag[3 * s + 2]);
+    auto emit = [&](const Vec3& a, const Vec3& b, const Vec3& c, bool north) {
+      const Vec3f col = material_color(kind[s], north);
+      for (const Vec3& p : {a, b, c}) m.positions.push_back(p.cast<float>()), m.colors.push_back(col);
+    };
+    for (std::int64_t t = tb[s]; t < tb[s] + tc[s]; ++t) {
+      const Vec3 p[3] = {vertex(tris[3 * t]), vertex(tris[3 * t + 1]), vertex(tris[3 * t + 2])};
+      if (kind[s] != "permanent") {
+        emit(p[0], p[1], p[2], true);
+        continue;
+      }
+      // North half: the side of the magnet the magnetization points to. Triangles crossing the
+      // mid-plane are cut along it, so the two halves meet on a straight line.
+      double d[3];
+      for (int k = 0; k < 3; ++k) d[k] = (p[k] - centre).dot(dir);
+      const bool n0 = d[0] >= 0, n1 = d[1] >= 0, n2 = d[2] >= 0;
+      if (n0 == n1 && n1 == n2) {
+        emit(p[0], p[1], p[2], n0);
+        continue;
+      }
+      // The lone vertex i (on one side) and the other two, in winding order.
+      const int i = (n0 != n1 && n0 != n2) ? 0 : (n1 != n0 && n1 != n2) ? 1 : 2;
+      const int j = (i + 1) % 3, k = (i + 2) % 3;
+      const Vec3 pj = p[i] + (p[j] - p[i]) * (d[i] / (d[i] - d[j]));
+      const Vec3 pk = p[i] + (p[k] - p[i]) * (d[i] / (d[i] - d[k]));
+      const bool lone_north = d[i] >= 0;
+      emit(p[i], pj, pk, lone_north);
+      emit(pj, p[j], p[k], !lone_north);
+      emit(pj, p[k], pk, !lone_north);
+    }
+    g.meshes.push_back(std::move(m));
+  }
+  return g;
+}
+
+Eigen::Matrix4f transform(const io::CacheFrame& fr, int b) {
+  Eigen::Matrix4f m = Eigen::Matrix4f::Identity();
+  m.block<3, 3>(0, 0) = fr.orientation[b].normalized().toRotationMatrix().cast<float>();
+  m.block<3, 1>(0, 3) = fr.position[b].cast<float>();
+  return m;
+}
+
+// Streamlines of B (RK4 on the unit direction field) from seeds around each magnet.
+std::vector<render::Polyline> field_lines(const magnetics::Model& model, const magnetics::State& st,
+                                          const Vec3& applied, const magnetics::Box3& bounds) {
+  magnetics::Settings fs;
+  fs.theta = 0.4;
+  fs.near_field = 0.0;
+  fs.external_field = applied;
+  struct Line {
+    std::vector<Vec3> pts;
+    std::vector<double> mag;
+    double sign;
+    bool alive = true;
+  };
+  std::vector<Line> lines;
+  const double size = bounds.sizes().maxCoeff();
+  for (int b = 0; b < model.body_count; ++b) {
+    if (!model.body_permanent[b] || model.body_root[b] < 0) continue;
+    const int root = model.body_root[b];
+    const Vec3 c = st.body_pose[b].position + st.node_offset[root];
+    const double r = 1.05 * model.node_radius[root];
+    const int n = 20;  // seeds on a Fibonacci sphere, each traced both ways
+    for (int i = 0; i < n; ++i) {
+      const double z = 1 - 2 * (i + 0.5) / n, phi = i * std::numbers::pi * (3 - std::sqrt(5.0));
+      const Vec3 d(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
+      for (double sign : {1.0, -1.0}) lines.push_back({{c + r * d}, {}, sign});
+    }
+  }
+  const double h = 0.012 * size;
+  auto eval = [&](const std::vector<Vec3>& p) {
+    return magnetics::field_at_points(model, fs, st, std::span<const Vec3>(p.data(), p.size()));
+  };
+  for (int step = 0; step < 220; ++step) {
+    std::vector<int> live;
+    std::vector<Vec3> x;
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      if (lines[i].alive) live.push_back(int(i)), x.push_back(lines[i].pts.back());
+    }
+    if (live.empty()) break;
+    auto dir = [&](const std::vector<Vec3>& B, std::size_t k) {
+      const double n = B[k].norm();
+      return n > 0 ? Vec3(lines[live[k]].sign * B[k] / n) : Vec3(Vec3::Zero());
+    };
+    const std::vector<Vec3> B1 = eval(x);
+    std::vector<Vec3> x2(x.size()), x3(x.size()), x4(x.size());
+    for (std::size_t k = 0; k < x.size(); ++k) x2[k] = x[k] + 0.5 * h * dir(B1, k);
+    const std::vector<Vec3> B2 = eval(x2);
+    for (std::size_t k = 0; k < x.size(); ++k) x3[k] = x[k] + 0.5 * h * dir(B2, k);
+    const std::vector<Vec3> B3 = eval(x3);
+    for (std::size_t k = 0; k < x.size(); ++k) x4[k] = x[k] + h * dir(B3, k);
+    const std::vector<Vec3> B4 = eval(x4);
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      Line& l = lines[live[k]];
+      l.mag.push_back(B1[k].norm());
+      const Vec3 next = x[k] + h / 6.0 * (dir(B1, k) + 2 * dir(B2, k) + 2 * dir(B3, k) + dir(B4, k));
+      if (B1[k].norm() < 1e-5 || !bounds.contains(next) || !next.allFinite()) {
+        l.alive = false;
+        continue;
+      }
+      l.pts.push_back(next);
+    }
+  }
+  std::vector<render::Polyline> out;
+  for (const Line& l : lines) {
+    if (l.pts.size() < 3) continue;
+    render::Polyline p;
+    for (std::size_t k = 0; k < l.pts.size(); ++k) {
+      p.points.push_back(l.pts[k].cast<float>());
+      p.colors.push_back(field_color(l.mag[std::min(k, l.mag.size() - 1)]));
+    }
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+}  // namespace
+
+int export_preview(const std::string& cache_path, const PreviewRequest& req, const Global& g) {
+  std::optional<io::CacheReader> cache;
+  try {
+    cache.emplace(cache_path);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return kUsage;
+  }
+  std::optional<scene::FieldOutput> field_out;
+  std::optional<scene::PreviewOutput> scene_preview;
+  scene::outputs_of_text(cache->scene_text(), field_out, scene_preview);
+  const scene::PreviewOutput defaults = scene_preview.value_or(scene::PreviewOutput{});
+  if (cache->frame_count() == 0) {
+    spdlog::error("{} holds no complete frame", cache_path);
+    return kUsage;
+  }
+  const int first = cache->frame(0).frame, last = cache->frame(cache->frame_count() - 1).frame;
+  int a = first, b = last;
+  if (req.frames) {
+    a = req.frames->first, b = req.frames->second;
+    if (a > b || a < first || b > last) {
+      spdlog::error("--frames {}-{} is outside the cache's frames {}-{}", a, b, first, last);
+      return kUsage;
+    }
+  }
+  const int width = req.width > 0 ? req.width : defaults.width, height = req.height > 0 ? req.height : defaults.height;
+  if (width < 16 || height < 16 || width > 8192 || height > 8192) {
+    spdlog::error("--size must be between 16x16 and 8192x8192, got {}x{}", width, height);
+    return kUsage;
+  }
+  const bool with_lines = req.field_lines.value_or(defaults.field_lines);
+  std::string pattern = !req.pattern.empty() ? req.pattern : (scene_preview ? defaults.path : "");
+  if (pattern.empty()) {
+    pattern = (fs::path(cache_path).parent_path() / (fs::path(cache_path).stem().string() + ".preview.####.png")).string();
+  }
+  const fs::path out_dir = fs::path(expand_pattern(pattern, a)).parent_path();
+  std::error_code ec;
+  if (!out_dir.empty()) fs::create_directories(out_dir, ec);
+  {
+    const fs::path probe = (out_dir.empty() ? fs::path(".") : out_dir) / ".magbake_write_test";
+    std::ofstream test(probe);
+    if (ec || !test) {
+      spdlog::error("cannot write previews to '{}': the folder is not writable", (out_dir.empty() ? fs::path(".") : out_dir).string());
+      return kUsage;
+    }
+    test.close();
+    fs::remove(probe, ec);
+  }
+
+  // Geometry and a steady camera: every body's extent over the whole shot.
+  const ShotGeometry geo = load_geometry(*cache);
+  std::vector<io::CacheFrame> frames;
+  for (int i = 0; i < cache->frame_count(); ++i) frames.push_back(cache->frame(i));
+  magnetics::Box3 box;
+  for (const io::CacheFrame& fr : frames) {
+    for (std::size_t bi = 0; bi < geo.body_points.size(); ++bi) {
+      for (const Vec3& p : geo.body_points[bi]) box.extend(fr.position[bi] + fr.orientation[bi] * p);
+    }
+  }
+  render::View view;
+  if (defaults.camera && req.auto_camera == false) {
+    view.eye = defaults.camera->position;
+    view.target = defaults.camera->look_at;
+    view.fov = defaults.camera->fov;
+  } else {
+    // Auto-framing: a three-quarter view from above that holds the shot's bounding sphere.
+    const Vec3 c = box.center();
+    const double r = std::max(0.5 * box.sizes().norm(), 1e-3);
+    view.fov = 40.0 * std::numbers::pi / 180.0;
+    const double aspect = double(width) / height;
+    const double half = std::min(0.5 * view.fov, std::atan(std::tan(0.5 * view.fov) * aspect));
+    view.target = c;
+    view.eye = c + Vec3(1.0, -1.6, 0.9).normalized() * (1.08 * r / std::sin(half));
+  }
+  const double dist = (view.eye - view.target).norm();
+  view.near_plane = std::max(1e-4, 0.01 * dist);
+  view.far_plane = 20 * dist + box.sizes().norm();
+
+  std::unique_ptr<render::GlContext> ctx;
+  std::unique_ptr<render::Renderer> renderer;
+  try {
+    ctx = render::GlContext::create_offscreen(width, height, g.threads);
+    renderer = std::make_unique<render::Renderer>(*ctx);
+  } catch (const std::exception& e) {
+    spdlog::error("cannot start offscreen rendering: {}", e.what());
+    return kFailure;
+  }
+  renderer->set_meshes(geo.meshes);
+  {
+    // Ground grid under everything: lines every 1, 2 or 5 x 10^k, about ten across.
+    const double extent = 0.75 * std::max(box.sizes()[0], box.sizes()[1]) + 0.25 * box.sizes().norm();
+    const double raw = extent / 5.0, p = std::pow(10.0, std::floor(std::log10(raw)));
+    const double spacing = raw / p < 2 ? p : raw / p < 5 ? 2 * p : 5 * p;
+    renderer->set_ground(box.center()[0], box.center()[1], box.min()[2] - 1e-4 * box.sizes().norm(), extent, spacing);
+  }
+
+  // Field lines need the magnetic model (rebuilt from the cache).
+  std::vector<int> induced_order;
+  magnetics::Model model;
+  magnetics::State st;
+  const auto coms = cache->centers_of_mass();
+  const std::vector<double> ext = cache->parameter_doubles("external_field");
+  const Vec3 applied(ext.at(0), ext.at(1), ext.at(2));
+  if (with_lines) {
+    model = cache->model(&induced_order);
+    st.resize(model);
+  }
+  // Field lines are traced inside a cube around the shot (flat shots still get their loops).
+  const double line_half = std::max(box.sizes().maxCoeff(), 1e-3);
+  const magnetics::Box3 line_bounds(box.center() - Vec3::Constant(line_half), box.center() + Vec3::Constant(line_half));
+
+  // Contact sheet: frames tiled in rows, box-filtered down so the sheet is at most 1920 pixels
+  // wide; each frame is added as it is drawn (memory: one sheet, not every frame).
+  int n_sheet = 0;
+  for (const io::CacheFrame& fr : frames) n_sheet += fr.frame >= a && fr.frame <= b;
+  const int cols = static_cast<int>(std::ceil(std::sqrt(double(n_sheet))));
+  const int rows = (n_sheet + cols - 1) / cols;
+  const int step = std::max(1, (cols * width + 1919) / 1920);
+  const int tw = width / step, th = height / step;
+  std::vector<std::uint8_t> sheet;
+  if (!req.contact_sheet.empty()) sheet.assign(std::size_t(cols * tw) * rows * th * 4, 255);
+  auto add_to_sheet = [&](const std::vector<std::uint8_t>& rgba, int i) {
+    const int ox = (i % cols) * tw, oy = (i / cols) * th;
+    for (int y = 0; y < th; ++y) {
+      for (int x = 0; x < tw; ++x) {
+        int sum[4] = {0, 0, 0, 0};
+        for (int yy = 0; yy < step; ++yy) {
+          for (int xx = 0; xx < step; ++xx) {
+            const std::size_t s = (std::size_t(y * step + yy) * width + x * step + xx) * 4;
+            for (int k = 0; k < 4; ++k) sum[k] += rgba[s + k];
+          }
+        }
+        const std::size_t d = (std::size_t(oy + y) * cols * tw + ox + x) * 4;
+        for (int k = 0; k < 4; ++k) sheet[d + k] = static_cast<std::uint8_t>((sum[k] + step * step / 2) / (step * step));
+      }
+    }
+  };
+  Progress progress("preview", b - a + 1, g.quiet);
+  int done = 0;
+  for (const io::CacheFrame& fr : frames) {
+    if (fr.frame < a || fr.frame > b) continue;
+    if (interrupt_requested()) {
+      progress.finish();
+      spdlog::warn("interrupted after {} previews", done);
+      return kInterrupted;
+    }
+    std::vector<Eigen::Matrix4f> xf;
+    for (std::size_t bi = 0; bi < geo.body_points.size(); ++bi) xf.push_back(transform(fr, int(bi)));
+    std::vector<render::Polyline> lines;
+    if (with_lines && !model.empty()) {
+      for (int bi = 0; bi < model.body_count; ++bi) {
+        st.body_pose[bi] = magnetics::Pose{fr.orientation[bi], fr.position[bi] + fr.orientation[bi] * coms[bi]};
+      }
+      std::vector<Vec3> induced(model.induced_cells.size());
+      for (std::size_t k = 0; k < induced.size(); ++k) induced[k] = fr.induced_moment.at(induced_order[k]);
+      magnetics::place(model, st, induced);
+      lines = field_lines(model, st, applied, line_bounds);
+    }
+    const std::vector<std::uint8_t> rgba = renderer->draw(view, xf, lines);
+    const std::string path = expand_pattern(pattern, fr.frame);
+    try {
+      render::write_png(path, rgba, width, height);
+    } catch (const std::exception& e) {
+      progress.finish();
+      spdlog::error("{}", e.what());
+      return kFailure;
+    }
+    if (!sheet.empty()) add_to_sheet(rgba, done);
+    ++done;
+    progress.update(done, "frame " + std::to_string(fr.frame));
+  }
+  progress.finish();
+  if (!sheet.empty()) {
+    try {
+      render::write_png(req.contact_sheet, sheet, cols * tw, rows * th);
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      return kFailure;
+    }
+  }
+  spdlog::info("wrote {} previews ({}x{}, {})", done, width, height, pattern);
+  return kOk;
+}
+
+}  // namespace magbake::cli
