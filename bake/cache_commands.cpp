@@ -33,7 +33,7 @@ int cmd_diff(const std::string& a_path, const std::string& b_path, const io::Dif
   }
 }
 
-int cmd_info_cache(const std::string& path) {
+int cmd_info_cache(const std::string& path, bool all_bodies) {
   try {
     const io::CacheReader c(path);
     std::printf("cache    %s\n", path.c_str());
@@ -46,10 +46,13 @@ int cmd_info_cache(const std::string& path) {
       std::printf(" (%d-%d, t = %g-%g s, %g fps)\n", a.frame, b.frame, a.time, b.time, c.fps());
       std::printf("bodies   %zu\n  %-18s %32s %32s\n", c.body_names().size(), "name", "first position (m)",
                   "last position (m)");
-      for (std::size_t i = 0; i < c.body_names().size(); ++i) {
+      const std::size_t n = c.body_names().size();
+      const std::size_t shown = all_bodies || n <= kSummaryBodies ? n : kSummaryBodies - 4;
+      for (std::size_t i = 0; i < shown; ++i) {
         std::printf("  %-18s %10.4g %10.4g %10.4g %10.4g %10.4g %10.4g\n", c.body_names()[i].c_str(), a.position[i][0],
                     a.position[i][1], a.position[i][2], b.position[i][0], b.position[i][1], b.position[i][2]);
       }
+      if (shown < n) std::printf("  ... and %zu more (--verbose lists every body)\n", n - shown);
       const auto mag = io::h5::read_rows(c.file(), "observables/magnetics_seconds/value", 0, c.frame_count());
       const auto rig = io::h5::read_rows(c.file(), "observables/rigid_seconds/value", 0, c.frame_count());
       double tm = 0, tr = 0;

@@ -33,7 +33,7 @@ const char* motion_name(scene::Motion m) {
 }
 }  // namespace
 
-std::string scene_summary(const scene::Scene& s) {
+std::string scene_summary(const scene::Scene& s, bool all_bodies) {
   std::ostringstream os;
   char buf[512];
   os << "scene    " << s.name << "  (" << s.file << ", sha256 " << s.hash.substr(0, 12) << ")\n";
@@ -67,7 +67,9 @@ std::string scene_summary(const scene::Scene& s) {
   os << "\nbodies   " << s.bodies.size() << "\n";
   std::snprintf(buf, sizeof buf, "  %-16s %-30s %-12s %-10s %10s\n", "name", "shape", "material", "motion", "mass (g)");
   os << buf;
-  for (const auto& b : s.bodies) {
+  const std::size_t shown = all_bodies || s.bodies.size() <= kSummaryBodies ? s.bodies.size() : kSummaryBodies - 4;
+  for (std::size_t i = 0; i < shown; ++i) {
+    const scene::Body& b = s.bodies[i];
     std::string mat = b.material >= 0 ? s.materials[b.material].name : "-";
     if (!b.parts.empty()) {
       mat.append("+").append(std::to_string(b.parts.size())).append(b.parts.size() == 1 ? " part" : " parts");
@@ -76,6 +78,7 @@ std::string scene_summary(const scene::Scene& s) {
                   mat.c_str(), motion_name(b.motion), b.mass * 1e3);
     os << buf;
   }
+  if (shown < s.bodies.size()) os << "  ... and " << s.bodies.size() - shown << " more (--verbose lists every body)\n";
   os << "outputs  cache " << (s.cache ? *s.cache : "(none)");
   if (s.field) os << "; field " << s.field->path;
   if (s.preview) os << "; preview " << s.preview->path << " " << s.preview->width << "x" << s.preview->height;

@@ -30,15 +30,19 @@ nlohmann::json json_vec(const Eigen::Vector3d& v);
 /// Writes JSON to stdout (pretty, one trailing newline).
 void print_json(const nlohmann::json& j);
 
-/// A human-readable one-screen summary of a scene (used by check and info).
-std::string scene_summary(const scene::Scene& s);
+/// Scenes with more bodies than this get a shortened body list in summaries (one screen).
+inline constexpr std::size_t kSummaryBodies = 24;
+
+/// A human-readable one-screen summary of a scene (used by check and info); `all_bodies` lists
+/// every body even in a large scene.
+std::string scene_summary(const scene::Scene& s, bool all_bodies = false);
 
 int cmd_check(const std::string& path, const Global& g);
 /// "A-B" or "A" -> a, b.
 bool parse_range(const std::string& text, int& a, int& b);
 int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
              const Global& g);
-int cmd_info_cache(const std::string& path);
+int cmd_info_cache(const std::string& path, bool all_bodies = false);
 int cmd_info(const std::string& path, const Global& g);
 int cmd_eval(const std::string& path, double time, bool json, const Global& g);
 int cmd_diff(const std::string& a, const std::string& b, const io::DiffOptions& options, const Global& g);

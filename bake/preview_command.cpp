@@ -1,6 +1,7 @@
 // magbake preview: PNG frames of a cache, rendered offscreen (OSMesa), with optional field lines.
 #include <spdlog/spdlog.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -118,7 +119,13 @@ Eigen::Matrix4f transform(const io::CacheFrame& fr, int b) {
   return m;
 }
 
-// Streamlines of B (RK4 on the unit direction field) from seeds around each magnet.
+// Streamlines of B (RK4 on the unit direction field) from seeds around each magnet: 20 seeds per
+// magnetized body, each traced both ways. A crowded shot (more than kLineSeedBudget / 20 magnetized
+// bodies) gets fewer seeds per body (kLineSeedBudget in all, at least 4 each), and its lines end
+// where they enter a magnet's bounding sphere instead of running on through chains of magnets:
+// the picture stays readable and the tracing cost bounded.
+constexpr int kLineSeedBudget = 320;
+
 std::vector<render::Polyline> field_lines(const magnetics::Model& model, const magnetics::State& st,
                                           const Vec3& applied, const magnetics::Box3& bounds) {
   magnetics::Settings fs;
@@ -130,21 +137,53 @@ std::vector<render::Polyline> field_lines(const magnetics::Model& model, const m
     std::vector<double> mag;
     double sign;
     bool alive = true;
+    bool was_outside = false;  // has been outside every magnet (seeds can start inside one's sphere)
   };
-  std::vector<Line> lines;
-  const double size = bounds.sizes().maxCoeff();
+  struct Sphere {
+    Vec3 c;
+    double r;
+  };
+  // Seeds around each magnetized body (its root node's sphere); lines end in the bounding
+  // sphere of any permanent part (a toy magnet's inserts, not its whole rod).
+  std::vector<Sphere> seeds, parts;
   for (int b = 0; b < model.body_count; ++b) {
     if (!model.body_permanent[b] || model.body_root[b] < 0) continue;
     const int root = model.body_root[b];
-    const Vec3 c = st.body_pose[b].position + st.node_offset[root];
-    const double r = 1.05 * model.node_radius[root];
-    const int n = 20;  // seeds on a Fibonacci sphere, each traced both ways
-    for (int i = 0; i < n; ++i) {
-      const double z = 1 - 2 * (i + 0.5) / n, phi = i * std::numbers::pi * (3 - std::sqrt(5.0));
-      const Vec3 d(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
-      for (double sign : {1.0, -1.0}) lines.push_back({{c + r * d}, {}, sign});
+    seeds.push_back({st.body_pose[b].position + st.node_offset[root], model.node_radius[root]});
+  }
+  {
+    const int np = static_cast<int>(model.part_body.size());
+    std::vector<Vec3> sum(np, Vec3::Zero());
+    std::vector<int> count(np, 0);
+    std::vector<double> reach(np, 0.0);
+    for (int c = 0; c < model.cell_count(); ++c) sum[model.cell_part[c]] += model.cell_center[c], ++count[model.cell_part[c]];
+    for (int p = 0; p < np; ++p) sum[p] /= std::max(count[p], 1);
+    for (int c = 0; c < model.cell_count(); ++c) {
+      const int p = model.cell_part[c];
+      reach[p] = std::max(reach[p], (model.cell_center[c] - sum[p]).norm() + model.cell_reach[c]);
+    }
+    for (int p = 0; p < np; ++p) {
+      if (count[p] == 0 || model.part_magnetization[p].squaredNorm() == 0) continue;
+      parts.push_back({st.body_pose[model.part_body[p]].apply(sum[p]), reach[p]});
     }
   }
+  std::vector<Line> lines;
+  const double size = bounds.sizes().maxCoeff();
+  const bool crowded = int(seeds.size()) * 20 > kLineSeedBudget;
+  const int n = std::clamp(kLineSeedBudget / std::max<int>(1, int(seeds.size())), 4, 20);
+  for (const Sphere& m : seeds) {
+    for (int i = 0; i < n; ++i) {  // seeds on a Fibonacci sphere, each traced both ways
+      const double z = 1 - 2 * (i + 0.5) / n, phi = i * std::numbers::pi * (3 - std::sqrt(5.0));
+      const Vec3 d(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
+      for (double sign : {1.0, -1.0}) lines.push_back({{m.c + 1.05 * m.r * d}, {}, sign});
+    }
+  }
+  auto inside_a_magnet = [&](const Vec3& x) {
+    for (const Sphere& m : parts) {
+      if ((x - m.c).squaredNorm() < m.r * m.r) return true;
+    }
+    return false;
+  };
   const double h = 0.012 * size;
   auto eval = [&](const std::vector<Vec3>& p) {
     return magnetics::field_at_points(model, fs, st, std::span<const Vec3>(p.data(), p.size()));
@@ -172,7 +211,11 @@ std::vector<render::Polyline> field_lines(const magnetics::Model& model, const m
       Line& l = lines[live[k]];
       l.mag.push_back(B1[k].norm());
       const Vec3 next = x[k] + h / 6.0 * (dir(B1, k) + 2 * dir(B2, k) + 2 * dir(B3, k) + dir(B4, k));
-      if (B1[k].norm() < 1e-5 || !bounds.contains(next) || !next.allFinite()) {
+      const bool in_magnet = crowded && inside_a_magnet(next);
+      const bool ends_in_magnet = crowded && in_magnet && (l.was_outside || l.pts.size() > 10);
+      l.was_outside = l.was_outside || !in_magnet;
+      if (B1[k].norm() < 1e-5 || !bounds.contains(next) || !next.allFinite() || ends_in_magnet) {
+        if (next.allFinite() && bounds.contains(next)) l.pts.push_back(next), l.mag.push_back(B1[k].norm());
         l.alive = false;
         continue;
       }
@@ -259,14 +302,22 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
     view.target = defaults.camera->look_at;
     view.fov = defaults.camera->fov;
   } else {
-    // Auto-framing: a three-quarter view from above that holds the shot's bounding sphere.
+    // Auto-framing: a three-quarter view from above, as close as it can be while every corner
+    // of the shot's box stays inside the picture with a 6% border.
     const Vec3 c = box.center();
-    const double r = std::max(0.5 * box.sizes().norm(), 1e-3);
     view.fov = 40.0 * std::numbers::pi / 180.0;
-    const double aspect = double(width) / height;
-    const double half = std::min(0.5 * view.fov, std::atan(std::tan(0.5 * view.fov) * aspect));
+    const double tan_v = 0.94 * std::tan(0.5 * view.fov), tan_h = tan_v * double(width) / height;
+    const Vec3 back = Vec3(1.0, -1.6, 0.9).normalized();  // from the target towards the eye
+    const Vec3 right = Vec3::UnitZ().cross(back).normalized(), up = back.cross(right);
+    double dist = 1e-3;
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 p = Vec3(k & 1 ? box.max()[0] : box.min()[0], k & 2 ? box.max()[1] : box.min()[1],
+                          k & 4 ? box.max()[2] : box.min()[2]) - c;
+      const double z = p.dot(back);
+      dist = std::max({dist, z + std::abs(p.dot(right)) / tan_h, z + std::abs(p.dot(up)) / tan_v});
+    }
     view.target = c;
-    view.eye = c + Vec3(1.0, -1.6, 0.9).normalized() * (1.08 * r / std::sin(half));
+    view.eye = c + back * dist;
   }
   const double dist = (view.eye - view.target).norm();
   view.near_plane = std::max(1e-4, 0.01 * dist);
@@ -340,6 +391,8 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
       spdlog::warn("interrupted after {} previews", done);
       return kInterrupted;
     }
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
     std::vector<Eigen::Matrix4f> xf;
     for (std::size_t bi = 0; bi < geo.body_points.size(); ++bi) xf.push_back(transform(fr, int(bi)));
     std::vector<render::Polyline> lines;
@@ -352,7 +405,9 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
       magnetics::place(model, st, induced);
       lines = field_lines(model, st, applied, line_bounds);
     }
+    const auto t1 = Clock::now();
     const std::vector<std::uint8_t> rgba = renderer->draw(view, xf, lines);
+    const auto t2 = Clock::now();
     const std::string path = expand_pattern(pattern, fr.frame);
     try {
       render::write_png(path, rgba, width, height);
@@ -361,7 +416,12 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
       spdlog::error("{}", e.what());
       return kFailure;
     }
+    const auto t3 = Clock::now();
     if (!sheet.empty()) add_to_sheet(rgba, done);
+    // One machine-readable line per frame for bench/run_preview_bench.sh (shown with -v).
+    auto ms = [](Clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); };
+    spdlog::debug("preview frame {} ms: lines {:.2f} draw {:.2f} png {:.2f} total {:.2f} ({} lines)", fr.frame, ms(t1 - t0),
+                  ms(t2 - t1), ms(t3 - t2), ms(Clock::now() - t0), lines.size());
     ++done;
     progress.update(done, "frame " + std::to_string(fr.frame));
   }

@@ -1,8 +1,10 @@
 // check, info, eval, probe: ask magbake what it computes, without baking.
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -51,19 +53,30 @@ bool parse_point(std::string text, Eigen::Vector3d& p) {
 
 }  // namespace
 
-int cmd_check(const std::string& path, const Global&) {
+int cmd_check(const std::string& path, const Global& g) {
   auto s = load_or_report(path);
   if (!s) return kUsage;
-  std::cout << scene_summary(*s);
+  std::cout << scene_summary(*s, g.verbose);
   try {
     // Cells per body and the cost of one evaluation at the first frame.
     Evaluated e = evaluate_at(*s, 0.0);
     std::cout << "cells    ";
+    int magnetic = 0, fewest = 0, most = 0;
     for (int b = 0; b < e.model.body_count; ++b) {
       const int n = e.model.body_cell_begin[b + 1] - e.model.body_cell_begin[b];
-      if (n > 0) std::cout << s->bodies[b].name << " " << n << "  ";
+      if (n == 0) continue;
+      fewest = magnetic == 0 ? n : std::min(fewest, n), most = std::max(most, n), ++magnetic;
     }
-    std::cout << "(total " << e.model.cell_count() << ")\n";
+    if (g.verbose || s->bodies.size() <= kSummaryBodies) {
+      for (int b = 0; b < e.model.body_count; ++b) {
+        const int n = e.model.body_cell_begin[b + 1] - e.model.body_cell_begin[b];
+        if (n > 0) std::cout << s->bodies[b].name << " " << n << "  ";
+      }
+      std::cout << "(total " << e.model.cell_count() << ")\n";
+    } else {
+      std::cout << e.model.cell_count() << " in " << magnetic << " magnetic bodies (" << fewest << " to " << most
+                << " per body)\n";
+    }
     // Repeat a few evaluations (warm) for a steadier figure.
     const auto t0 = std::chrono::steady_clock::now();
     int reps = 0;
@@ -87,11 +100,14 @@ int cmd_check(const std::string& path, const Global&) {
 }
 
 int cmd_info(const std::string& path, const Global& g) {
-  (void)g;
-  if (H5Fis_hdf5(path.c_str()) > 0 || path.ends_with(".h5") || path.ends_with(".partial")) return cmd_info_cache(path);
+  if (!std::filesystem::exists(path)) {
+    std::cerr << "magbake info: " << path << ": no such file\n";
+    return kUsage;
+  }
+  if (H5Fis_hdf5(path.c_str()) > 0 || path.ends_with(".h5") || path.ends_with(".partial")) return cmd_info_cache(path, g.verbose);
   auto s = load_or_report(path);
   if (!s) return kUsage;
-  std::cout << scene_summary(*s);
+  std::cout << scene_summary(*s, g.verbose);
   return kOk;
 }
 

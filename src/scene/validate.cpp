@@ -2,7 +2,10 @@
 #include <openssl/evp.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <map>
+#include <memory>
 #include <numbers>
 #include <set>
 
@@ -19,7 +22,27 @@ struct Ctx {
   double L = 1;  // file length unit -> m
   double A = 1;  // file angle unit -> rad
   std::filesystem::path dir;
+  /// Bodies and parts with the same shape share one geometry object, so its derived data (cells,
+  /// demagnetization tensors, convex pieces) is computed once per distinct shape, not per body.
+  std::map<std::string, std::shared_ptr<const geometry::Shape>> shapes = {};
 };
+
+template <class S, class... Args>
+std::shared_ptr<const geometry::Shape> shared_shape(Ctx& c, const std::string& key, Args&&... args) {
+  auto& slot = c.shapes[key];
+  if (!slot) slot = std::make_shared<S>(std::forward<Args>(args)...);
+  return slot;
+}
+
+std::string shape_key(const char* kind, std::initializer_list<double> values) {
+  std::string key = kind;
+  for (double v : values) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, " %a", v);  // exact: hex float
+    key += buf;
+  }
+  return key;
+}
 
 bool positive(Ctx& c, const Val<double>& v, const std::string& path, const char* what = "length") {
   if (!v.set) return false;
@@ -82,18 +105,18 @@ ShapeDesc shape(Ctx& c, const ShapeSpec& s, const std::string& path) {
       }
     }
     out.size = vec3(s.size, c.L);
-    out.shape = std::make_shared<geometry::BoxShape>(out.size);
+    out.shape = shared_shape<geometry::BoxShape>(c, shape_key("box", {out.size[0], out.size[1], out.size[2]}), out.size);
   } else if (s.kind == "sphere") {
     out.kind = geometry::ShapeKind::kSphere;
     if (!positive(c, s.radius, kp + ".radius")) return out;
     out.radius = s.radius.v * c.L;
-    out.shape = std::make_shared<geometry::SphereShape>(out.radius);
+    out.shape = shared_shape<geometry::SphereShape>(c, shape_key("sphere", {out.radius}), out.radius);
   } else if (s.kind == "cylinder") {
     out.kind = geometry::ShapeKind::kCylinder;
     const bool ok = positive(c, s.radius, kp + ".radius") & positive(c, s.height, kp + ".height");
     if (!ok) return out;
     out.radius = s.radius.v * c.L, out.height = s.height.v * c.L;
-    out.shape = std::make_shared<geometry::CylinderShape>(out.radius, out.height);
+    out.shape = shared_shape<geometry::CylinderShape>(c, shape_key("cylinder", {out.radius, out.height}), out.radius, out.height);
   } else if (s.kind == "torus") {
     out.kind = geometry::ShapeKind::kTorus;
     const bool ok = positive(c, s.major, kp + ".major") & positive(c, s.minor, kp + ".minor");
@@ -103,7 +126,7 @@ ShapeDesc shape(Ctx& c, const ShapeSpec& s, const std::string& path) {
       return out;
     }
     out.major = s.major.v * c.L, out.minor = s.minor.v * c.L;
-    out.shape = std::make_shared<geometry::TorusShape>(out.major, out.minor);
+    out.shape = shared_shape<geometry::TorusShape>(c, shape_key("torus", {out.major, out.minor}), out.major, out.minor);
   } else if (s.kind == "mesh") {
     out.kind = geometry::ShapeKind::kMesh;
     if (!s.file.set) return out;
@@ -117,8 +140,13 @@ ShapeDesc shape(Ctx& c, const ShapeSpec& s, const std::string& path) {
     out.mesh_file = file.lexically_normal().string();
     out.mesh_scale = scale;
     try {
-      geometry::TriangleSoup soup = geometry::load_triangles(out.mesh_file, scale * c.L);
-      out.shape = std::make_shared<geometry::MeshShape>(std::move(soup.vertices), std::move(soup.triangles));
+      const std::string key = shape_key(("mesh " + out.mesh_file).c_str(), {scale * c.L});
+      if (auto it = c.shapes.find(key); it != c.shapes.end()) {
+        out.shape = it->second;
+      } else {
+        geometry::TriangleSoup soup = geometry::load_triangles(out.mesh_file, scale * c.L);
+        out.shape = shared_shape<geometry::MeshShape>(c, key, std::move(soup.vertices), std::move(soup.triangles));
+      }
     } catch (const std::exception& e) {
       c.d.add(s.file.loc, kp + ".file", e.what());
     }

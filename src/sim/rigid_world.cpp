@@ -7,7 +7,9 @@
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
+#include <map>
 #include <numbers>
+#include <tuple>
 
 namespace magbake::sim {
 namespace {
@@ -74,6 +76,9 @@ struct RigidWorld::Impl {
   std::vector<std::unique_ptr<btTriangleMesh>> meshes;
   std::vector<std::unique_ptr<btTriangleInfoMap>> edge_infos;
   std::vector<std::unique_ptr<btRigidBody>> bodies;
+  // Collision shapes shared by bodies of the same scene shape (Bullet allows sharing): a heap of
+  // 50 identical meshes is decomposed into convex pieces once, not 50 times.
+  std::map<std::tuple<const geometry::Shape*, bool, double>, btCollisionShape*> shared;
   // Bullet's body frame in the scene body frame: x_body = principal * x_bullet + origin.
   std::vector<Mat3> principal;
   std::vector<Vec3> origin;
@@ -187,7 +192,9 @@ RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>
     const bool dynamic = b.motion == scene::Motion::kDynamic;
     const double extent = b.shape.shape->bounds().sizes().minCoeff();
     const double margin = std::min(5e-4, 0.1 * extent);
-    btCollisionShape* shape = m.make_shape(b.shape, dynamic, margin);
+    btCollisionShape*& cached = m.shared[{b.shape.shape.get(), dynamic, margin}];
+    if (!cached) cached = m.make_shape(b.shape, dynamic, margin);
+    btCollisionShape* shape = cached;
     btVector3 inertia(0, 0, 0);
     if (dynamic) {
       // Bullet wants principal axes at the centre of mass: diagonalize (deterministic).

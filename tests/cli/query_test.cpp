@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -181,6 +182,31 @@ TEST(Commands, CheckAndInfoSummarizeTheDemo) {
   EXPECT_EQ(magbake("--help").code, 0);
   EXPECT_EQ(magbake("eval").code, 2);             // missing scene
   EXPECT_EQ(magbake("nonsense").code, 2);         // unknown command
+}
+
+TEST(Commands, CheckOfALargeSceneFitsOnOneScreen) {
+  // 60 magnets of one shape: the summary lists the first bodies and counts the rest; --verbose
+  // lists all.
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "magbake_large_check";
+  std::filesystem::create_directories(dir);
+  std::ofstream f(dir / "large.yaml");
+  f << "magbake: 1\nname: large\nunits: {length: mm, angle: deg}\ntime: {fps: 30, frames: [1, 2]}\n"
+       "materials:\n  N42: {kind: permanent, remanence: 1.3, density: 7500}\nbodies:\n";
+  for (int i = 0; i < 60; ++i) {
+    f << "  - {name: m" << i << ", shape: {cylinder: {radius: 4, height: 8}}, material: N42, magnetization: [0, 0, 1], "
+      << "position: [" << 30 * (i % 8) << ", " << 30 * (i / 8) << ", 10], motion: static}\n";
+  }
+  f.close();
+  const Outcome c = magbake("check " + (dir / "large.yaml").string());
+  EXPECT_EQ(c.code, 0) << c.out;
+  EXPECT_LE(std::count(c.out.begin(), c.out.end(), '\n'), 40) << c.out;
+  EXPECT_NE(c.out.find("... and 40 more (--verbose lists every body)"), std::string::npos) << c.out;
+  EXPECT_NE(c.out.find("in 60 magnetic bodies"), std::string::npos) << c.out;
+  const Outcome v = magbake("-v check " + (dir / "large.yaml").string());
+  EXPECT_EQ(v.code, 0);
+  EXPECT_NE(v.out.find("  m59 "), std::string::npos) << v.out;
+  EXPECT_EQ(v.out.find("more (--verbose"), std::string::npos);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(EvalCommand, KinematicBodiesAreAtTheirKeyedPose) {

@@ -86,5 +86,25 @@ TEST(Scene, CellsLiveInTheCentreOfMassFrame) {
   EXPECT_GT(s.bodies[0].com.norm(), 1e-3);
 }
 
+TEST(Scene, IdenticalShapesShareOneGeometryObject) {
+  // Derived data (convex pieces, demagnetization tensors) is cached per geometry object, so a
+  // heap of identical bodies must share it; different sizes must not.
+  const Scene s = load_scene_text(
+      "magbake: 1\nunits: {length: mm, angle: deg}\nmaterials: {m: {kind: soft, chi: 700, density: 7850}}\n"
+      "bodies:\n"
+      "  - {name: a, shape: {mesh: {file: meshes/horseshoe.obj}}, material: m}\n"
+      "  - {name: b, shape: {mesh: {file: meshes/horseshoe.obj}}, material: m, position: [50, 0, 0]}\n"
+      "  - {name: c, shape: {mesh: {file: meshes/horseshoe.obj, scale: 2}}, material: m, position: [0, 50, 0]}\n"
+      "  - {name: d, shape: {torus: {major: 6, minor: 2}}, material: m, position: [0, 0, 50]}\n"
+      "  - {name: e, shape: {torus: {major: 6, minor: 2}}, material: m, position: [0, 0, 80]}\n"
+      "  - {name: f, shape: {torus: {major: 6, minor: 3}}, material: m, position: [0, 0, 110]}\n",
+      source_dir() + "/scenes/x.yaml");
+  EXPECT_EQ(s.bodies[0].shape.shape.get(), s.bodies[1].shape.shape.get());
+  EXPECT_NE(s.bodies[0].shape.shape.get(), s.bodies[2].shape.shape.get());
+  EXPECT_NEAR(s.bodies[2].mass, 8 * s.bodies[0].mass, 1e-9 * s.bodies[2].mass);
+  EXPECT_EQ(s.bodies[3].shape.shape.get(), s.bodies[4].shape.shape.get());
+  EXPECT_NE(s.bodies[3].shape.shape.get(), s.bodies[5].shape.shape.get());
+}
+
 }  // namespace
 }  // namespace magbake::scene
