@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "cache_export.h"
 #include "cli.h"
 #include "field_export.h"
 #include "io/cache.h"
@@ -16,26 +17,6 @@
 namespace magbake::cli {
 namespace fs = std::filesystem;
 using magnetics::Vec3;
-
-std::string expand_pattern(const std::string& pattern, int frame) {
-  // "####" (any run of #) -> zero-padded frame; otherwise a printf %d / %04d style pattern.
-  const auto h = pattern.find('#');
-  if (h != std::string::npos) {
-    std::size_t n = 0;
-    while (h + n < pattern.size() && pattern[h + n] == '#') ++n;
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%0*d", static_cast<int>(n), frame);
-    return pattern.substr(0, h) + buf + pattern.substr(h + n);
-  }
-  if (pattern.find('%') != std::string::npos) {
-    char buf[4096];
-    std::snprintf(buf, sizeof buf, pattern.c_str(), frame);
-    return buf;
-  }
-  // No frame token: add one before the extension.
-  const fs::path p(pattern);
-  return (p.parent_path() / (p.stem().string() + "." + std::to_string(frame) + p.extension().string())).string();
-}
 
 namespace {
 
@@ -65,49 +46,19 @@ magnetics::Box3 magnetic_bounds(const io::CacheReader& cache, const magnetics::M
 
 int export_field(const std::string& cache_path, const FieldRequest& req, const Global& g) {
   std::optional<io::CacheReader> cache;
-  try {
-    cache.emplace(cache_path);
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return kUsage;
-  }
+  int a = 0, b = 0;
+  if (const int rc = open_cache_range(cache_path, req.frames, cache, a, b); rc != kOk) return rc;
   std::optional<scene::FieldOutput> field;
   std::optional<scene::PreviewOutput> preview;
   scene::outputs_of_text(cache->scene_text(), field, preview);
   const scene::FieldOutput defaults = field.value_or(scene::FieldOutput{});
 
-  // Frames.
-  if (cache->frame_count() == 0) {
-    spdlog::error("{} holds no complete frame", cache_path);
-    return kUsage;
-  }
-  const int first = cache->frame(0).frame, last = cache->frame(cache->frame_count() - 1).frame;
-  int a = first, b = last;
-  if (req.frames) {
-    a = req.frames->first, b = req.frames->second;
-    if (a > b || a < first || b > last) {
-      spdlog::error("--frames {}-{} is outside the cache's frames {}-{}", a, b, first, last);
-      return kUsage;
-    }
-  }
   const int every = req.every.value_or(field ? defaults.every : 1);
 
   // Output pattern, checked writable before any work.
   std::string pattern = req.pattern.empty() ? (field ? defaults.path : "") : req.pattern;
   if (pattern.empty()) pattern = (fs::path(cache_path).parent_path() / (fs::path(cache_path).stem().string() + ".####.vdb")).string();
-  const fs::path out_dir = fs::path(expand_pattern(pattern, a)).parent_path();
-  std::error_code ec;
-  if (!out_dir.empty()) fs::create_directories(out_dir, ec);
-  {
-    const fs::path probe = (out_dir.empty() ? fs::path(".") : out_dir) / ".magbake_write_test";
-    std::ofstream test(probe);
-    if (ec || !test) {
-      spdlog::error("cannot write field volumes to '{}': the folder is not writable", (out_dir.empty() ? fs::path(".") : out_dir).string());
-      return kUsage;
-    }
-    test.close();
-    fs::remove(probe, ec);
-  }
+  if (const int rc = prepare_output_folder(pattern, a, "field volumes"); rc != kOk) return rc;
 
   std::vector<int> induced_order;
   const magnetics::Model model = cache->model(&induced_order);

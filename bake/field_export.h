@@ -5,6 +5,7 @@
 #include <string>
 #include <utility>
 
+#include "cache_export.h"
 #include "cli.h"
 #include "io/field_volume.h"
 #include "magnetics/system.h"
@@ -23,9 +24,6 @@ struct FieldRequest {
   double theta = 0.25;                        ///< tree opening angle (error bound, see docs)
   double max_voxels = 6e7;                    ///< capacity guard
 };
-
-/// "name.####.vdb" / "name.%04d.vdb" with a frame number.
-std::string expand_pattern(const std::string& pattern, int frame);
 
 /// B at every voxel centre of `samples` (origin, voxel, dims set): the model placed in `s`
 /// plus the applied field. Blocks of voxels whose field is provably below `threshold` (sum

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <numbers>
 
+#include "cache_export.h"
 #include "field_export.h"
 #include "gl_context.h"
 #include "io/cache.h"
@@ -239,29 +240,12 @@ std::vector<render::Polyline> field_lines(const magnetics::Model& model, const m
 
 int export_preview(const std::string& cache_path, const PreviewRequest& req, const Global& g) {
   std::optional<io::CacheReader> cache;
-  try {
-    cache.emplace(cache_path);
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return kUsage;
-  }
+  int a = 0, b = 0;
+  if (const int rc = open_cache_range(cache_path, req.frames, cache, a, b); rc != kOk) return rc;
   std::optional<scene::FieldOutput> field_out;
   std::optional<scene::PreviewOutput> scene_preview;
   scene::outputs_of_text(cache->scene_text(), field_out, scene_preview);
   const scene::PreviewOutput defaults = scene_preview.value_or(scene::PreviewOutput{});
-  if (cache->frame_count() == 0) {
-    spdlog::error("{} holds no complete frame", cache_path);
-    return kUsage;
-  }
-  const int first = cache->frame(0).frame, last = cache->frame(cache->frame_count() - 1).frame;
-  int a = first, b = last;
-  if (req.frames) {
-    a = req.frames->first, b = req.frames->second;
-    if (a > b || a < first || b > last) {
-      spdlog::error("--frames {}-{} is outside the cache's frames {}-{}", a, b, first, last);
-      return kUsage;
-    }
-  }
   const int width = req.width > 0 ? req.width : defaults.width, height = req.height > 0 ? req.height : defaults.height;
   if (width < 16 || height < 16 || width > 8192 || height > 8192) {
     spdlog::error("--size must be between 16x16 and 8192x8192, got {}x{}", width, height);
@@ -272,19 +256,7 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
   if (pattern.empty()) {
     pattern = (fs::path(cache_path).parent_path() / (fs::path(cache_path).stem().string() + ".preview.####.png")).string();
   }
-  const fs::path out_dir = fs::path(expand_pattern(pattern, a)).parent_path();
-  std::error_code ec;
-  if (!out_dir.empty()) fs::create_directories(out_dir, ec);
-  {
-    const fs::path probe = (out_dir.empty() ? fs::path(".") : out_dir) / ".magbake_write_test";
-    std::ofstream test(probe);
-    if (ec || !test) {
-      spdlog::error("cannot write previews to '{}': the folder is not writable", (out_dir.empty() ? fs::path(".") : out_dir).string());
-      return kUsage;
-    }
-    test.close();
-    fs::remove(probe, ec);
-  }
+  if (const int rc = prepare_output_folder(pattern, a, "previews"); rc != kOk) return rc;
 
   // Geometry and a steady camera: every body's extent over the whole shot.
   const ShotGeometry geo = load_geometry(*cache);

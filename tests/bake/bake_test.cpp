@@ -14,25 +14,11 @@
 
 #include "io/cache.h"
 #include "io/diff.h"
+#include "support/shell.h"
 
 namespace magbake::testing {
 namespace {
 namespace fs = std::filesystem;
-
-struct Outcome {
-  int code = -1;
-  std::string out;
-};
-
-Outcome sh(const std::string& cmd) {
-  Outcome r;
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), buf.size(), p)) r.out += buf.data();
-  const int st = pclose(p);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
 
 std::string exe() { return MAGBAKE_EXE; }
 std::string src(const std::string& rel) { return std::string(MAGBAKE_SOURCE_DIR) + "/" + rel; }
@@ -41,10 +27,10 @@ class Bake : public ::testing::Test {
  protected:
   fs::path dir;
   void SetUp() override {
-    dir = fs::temp_directory_path() /
-          ("magbake_bake_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+    dir = fresh_temp_dir("magbake_bake_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir);  // kept for a look when the test failed
   }
   Outcome bake(const std::string& scene, const std::string& out, const std::string& extra = "") {
     return sh(exe() + " " + extra + " bake " + scene + " -o " + (dir / out).string());

@@ -2,6 +2,7 @@
 // against the closed forms the library tests use.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
@@ -43,7 +44,7 @@ std::string scene(const std::string& name) { return std::string(MAGBAKE_SOURCE_D
 Vec3 vec(const nlohmann::json& j) { return Vec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>()); }
 
 std::string temp_scene(const std::string& name, const std::string& text) {
-  const auto path = std::filesystem::temp_directory_path() / ("magbake_cli_" + name);
+  const auto path = std::filesystem::temp_directory_path() / ("magbake_cli_" + std::to_string(::getpid()) + "_" + name);
   std::ofstream(path) << text;
   return path.string();
 }
@@ -187,7 +188,8 @@ TEST(Commands, CheckAndInfoSummarizeTheDemo) {
 TEST(Commands, CheckOfALargeSceneFitsOnOneScreen) {
   // 60 magnets of one shape: the summary lists the first bodies and counts the rest; --verbose
   // lists all.
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "magbake_large_check";
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("magbake_large_check_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   std::ofstream f(dir / "large.yaml");
   f << "magbake: 1\nname: large\nunits: {length: mm, angle: deg}\ntime: {fps: 30, frames: [1, 2]}\n"

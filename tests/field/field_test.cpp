@@ -15,23 +15,12 @@
 #include <iomanip>
 #include <sstream>
 
+#include "support/shell.h"
+
 namespace magbake::testing {
 namespace {
 namespace fs = std::filesystem;
 
-struct Outcome {
-  int code = -1;
-  std::string out;
-};
-Outcome sh(const std::string& cmd) {
-  Outcome r;
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), buf.size(), p)) r.out += buf.data();
-  const int st = pclose(p);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
 std::string exe() { return MAGBAKE_EXE; }
 std::string src(const std::string& rel) { return std::string(MAGBAKE_SOURCE_DIR) + "/" + rel; }
 
@@ -40,10 +29,10 @@ class Field : public ::testing::Test {
   fs::path dir;
   void SetUp() override {
     openvdb::initialize();
-    dir = fs::temp_directory_path() /
-          ("magbake_field_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+    dir = fresh_temp_dir("magbake_field_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir);  // kept for a look when the test failed
   }
   openvdb::GridPtrVecPtr read(const fs::path& p, openvdb::MetaMap::Ptr* meta = nullptr) {
     openvdb::io::File f(p.string());
@@ -187,8 +176,7 @@ TEST_F(Field, NoMagneticBodiesBadRangesAndUnwritablePaths) {
 
 TEST(PatternExpansion, HashesAndPrintf) {
   // Through the binary: -o with %04d gives the same names as ####.
-  const fs::path d = fs::temp_directory_path() / "magbake_field_pattern";
-  fs::remove_all(d);
+  const fs::path d = fresh_temp_dir("magbake_field_pattern");
   const std::string cache = src("tests/golden/sphere_pickup.h5");
   ASSERT_EQ(sh(exe() + " field " + cache + " --frames 12-12 --voxel 0.003 -o " + (d / "a.%04d.vdb").string()).code, 0);
   ASSERT_EQ(sh(exe() + " field " + cache + " --frames 12-12 --voxel 0.003 -o " + (d / "b.##.vdb").string()).code, 0);

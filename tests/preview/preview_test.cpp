@@ -10,24 +10,12 @@
 
 #include "png_file.h"
 #include "renderer.h"
+#include "support/shell.h"
 
 namespace magbake::testing {
 namespace {
 namespace fs = std::filesystem;
 
-struct Outcome {
-  int code = -1;
-  std::string out;
-};
-Outcome sh(const std::string& cmd) {
-  Outcome r;
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), buf.size(), p)) r.out += buf.data();
-  const int st = pclose(p);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
 std::string exe() { return MAGBAKE_EXE; }
 std::string src(const std::string& rel) { return std::string(MAGBAKE_SOURCE_DIR) + "/" + rel; }
 
@@ -60,11 +48,10 @@ class Preview : public ::testing::Test {
  protected:
   static fs::path dir;
   static void SetUpTestSuite() {
-    dir = fs::temp_directory_path() / "magbake_preview_test";
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+    dir = fresh_temp_dir("magbake_preview_test");
     ASSERT_EQ(sh(exe() + " bake " + src("tests/preview/three_bodies.yaml") + " -o " + dir.string()).code, 0);
   }
+  static void TearDownTestSuite() { fs::remove_all(dir); }
   Image render(const std::string& extra, const std::string& name) {
     const Outcome r = sh(exe() + " preview " + (dir / "three_bodies.h5").string() + " --frames 2-2 -o " +
                          (dir / (name + ".####.png")).string() + " " + extra);

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "scene/load.h"
+#include "support/shell.h"
 
 namespace magbake::scene {
 namespace {
@@ -153,8 +154,7 @@ TEST(SceneValidation, SyntaxErrorHasAPosition) {
 
 class MeshFiles : public ::testing::Test {
  protected:
-  std::filesystem::path dir = std::filesystem::temp_directory_path() / "magbake_scene_test";
-  void SetUp() override { std::filesystem::create_directories(dir); }
+  std::filesystem::path dir = magbake::testing::fresh_temp_dir("magbake_scene_test");
   std::string write(const std::string& name, const std::string& text) {
     std::ofstream(dir / name) << text;
     return (dir / name).string();
