@@ -25,7 +25,10 @@ class OsMesaContext final : public GlContext {
     }
     OSMesaPixelStore(OSMESA_Y_UP, 0);  // row 0 at the top
   }
-  ~OsMesaContext() override { OSMesaDestroyContext(ctx_); }
+  ~OsMesaContext() override {
+    OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0);  // release the framebuffer before the context
+    OSMesaDestroyContext(ctx_);
+  }
   std::vector<std::uint8_t> read_rgba() override {
     glFinish();
     return buffer_;

@@ -89,15 +89,18 @@ int bake_and_signal(const std::string& scene, const fs::path& out, int sig, int 
     _exit(127);
   }
   // Not a tty: the bake prints "Progress: NN%" lines to the log.
-  for (int i = 0; i < 6000; ++i) {
+  // Waits up to 10 minutes (a sanitizer build bakes the demo at ~1 s per frame).
+  bool reached = false;
+  for (int i = 0; i < 120000 && !reached; ++i) {
     std::ifstream log(out.string() + ".log");
     std::string line, last;
     while (std::getline(log, line)) {
       if (line.rfind("Progress: ", 0) == 0) last = line;
     }
-    if (!last.empty() && std::stoi(last.substr(10)) >= percent) break;
-    usleep(5000);
+    reached = !last.empty() && std::stoi(last.substr(10)) >= percent;
+    if (!reached) usleep(5000);
   }
+  EXPECT_TRUE(reached) << "the bake never reported " << percent << "%";
   kill(pid, sig);
   int st = 0;
   waitpid(pid, &st, 0);

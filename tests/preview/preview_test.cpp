@@ -47,10 +47,14 @@ Eigen::Vector2i project(const Eigen::Vector3d& x, int w, int h) {
 class Preview : public ::testing::Test {
  protected:
   static fs::path dir;
+  static std::string setup_error;  // a failed shared bake fails every test (a fatal failure in
+                                    // SetUpTestSuite would only mark them skipped)
   static void SetUpTestSuite() {
     dir = fresh_temp_dir("magbake_preview_test");
-    ASSERT_EQ(sh(exe() + " bake " + src("tests/preview/three_bodies.yaml") + " -o " + dir.string()).code, 0);
+    const Outcome r = sh(exe() + " bake " + src("tests/preview/three_bodies.yaml") + " -o " + dir.string());
+    setup_error = r.code == 0 ? "" : "baking three_bodies.yaml failed (exit " + std::to_string(r.code) + "):\n" + r.out;
   }
+  void SetUp() override { ASSERT_TRUE(setup_error.empty()) << setup_error; }
   static void TearDownTestSuite() { fs::remove_all(dir); }
   Image render(const std::string& extra, const std::string& name) {
     const Outcome r = sh(exe() + " preview " + (dir / "three_bodies.h5").string() + " --frames 2-2 -o " +
@@ -60,6 +64,7 @@ class Preview : public ::testing::Test {
   }
 };
 fs::path Preview::dir;
+std::string Preview::setup_error;
 
 bool near_background(const Eigen::Vector3i& c) {
   const render::Vec3f bg = render::Renderer::background();
