@@ -146,15 +146,19 @@ int main(int argc, char** argv) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, g.threads);
   }
 
-  if (*field) {
-    if (!field_frames.empty()) {
-      int fa, fb;
-      if (!cli::parse_range(field_frames, fa, fb)) {
-        spdlog::error("--frames expects A-B, got '{}'", field_frames);
-        return cli::kUsage;
-      }
-      field_req.frames = std::make_pair(fa, fb);
+  // --frames A-B of the cache readers: unset when empty; false (after logging) when malformed.
+  auto frames_option = [](const std::string& text, std::optional<std::pair<int, int>>& out) {
+    if (text.empty()) return true;
+    int fa = 0, fb = 0;
+    if (!cli::parse_range(text, fa, fb)) {
+      spdlog::error("--frames expects A-B, got '{}'", text);
+      return false;
     }
+    out = std::make_pair(fa, fb);
+    return true;
+  };
+  if (*field) {
+    if (!frames_option(field_frames, field_req.frames)) return cli::kUsage;
     if (field_voxel > 0) field_req.voxel = field_voxel;
     if (field_margin >= 0) field_req.margin = field_margin;
     if (!field_bounds.empty()) {
@@ -170,14 +174,7 @@ int main(int argc, char** argv) {
     return cli::export_field(field_cache, field_req, g);
   }
   if (*preview) {
-    if (!preview_frames.empty()) {
-      int fa, fb;
-      if (!cli::parse_range(preview_frames, fa, fb)) {
-        spdlog::error("--frames expects A-B, got '{}'", preview_frames);
-        return cli::kUsage;
-      }
-      preview_req.frames = std::make_pair(fa, fb);
-    }
+    if (!frames_option(preview_frames, preview_req.frames)) return cli::kUsage;
     if (!preview_size.empty() &&
         std::sscanf(preview_size.c_str(), "%dx%d", &preview_req.width, &preview_req.height) != 2) {
       spdlog::error("--size expects WxH, got '{}'", preview_size);
