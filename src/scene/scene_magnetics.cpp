@@ -2,6 +2,26 @@
 
 namespace magbake::scene {
 
+bool apply_quality_preset(const std::string& quality, MagneticsSettings& mg) {
+  struct Preset {
+    const char* name;
+    int cells_per_extent;
+    double theta, near_field;
+    int near_field_order;
+  };
+  static constexpr Preset kPresets[] = {{"draft", 2, 0.7, 1.5, 3}, {"default", 4, 0.5, 2.5, 4}, {"high", 8, 0.3, 4.0, 6}};
+  for (const Preset& p : kPresets) {
+    if (quality != p.name) continue;
+    mg.quality = quality;
+    mg.cells_per_extent = p.cells_per_extent;
+    mg.theta = p.theta;
+    mg.near_field = p.near_field;
+    mg.near_field_order = p.near_field_order;
+    return true;
+  }
+  return false;
+}
+
 magnetics::Settings magnetics_settings(const Scene& sc) {
   magnetics::Settings st;
   st.theta = sc.magnetics.theta;

@@ -2,12 +2,18 @@
 // centre-of-mass frame, library settings from the scene's magnetics section.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "magnetics/system.h"
 #include "scene.h"
 
 namespace magbake::scene {
+
+/// Sets quality, cells_per_extent, theta, near_field and near_field_order to the preset
+/// `quality` (draft | default | high; docs/scene-format.md); false (nothing changed) if unknown.
+/// cell_size and induction are left as they are.
+bool apply_quality_preset(const std::string& quality, MagneticsSettings& mg);
 
 /// Library settings from the scene (presets already resolved in the Scene).
 magnetics::Settings magnetics_settings(const Scene& scene);

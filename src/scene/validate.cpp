@@ -11,6 +11,7 @@
 
 #include "geometry/mesh_import.h"
 #include "load.h"
+#include "scene_magnetics.h"
 
 namespace magbake::scene {
 namespace {
@@ -348,11 +349,9 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
   // Magnetics settings and presets.
   auto& mg = sc.magnetics;
   if (s.quality.set) {
-    mg.quality = s.quality.v;
-    if (mg.quality == "draft") mg.cells_per_extent = 2, mg.theta = 0.7, mg.near_field = 1.5, mg.near_field_order = 3;
-    else if (mg.quality == "default") mg.cells_per_extent = 4, mg.theta = 0.5, mg.near_field = 2.5, mg.near_field_order = 4;
-    else if (mg.quality == "high") mg.cells_per_extent = 8, mg.theta = 0.3, mg.near_field = 4.0, mg.near_field_order = 6;
-    else d.add(s.quality.loc, "magnetics.quality", "expected draft, default or high, got '" + mg.quality + "'");
+    if (!apply_quality_preset(s.quality.v, mg)) {
+      d.add(s.quality.loc, "magnetics.quality", "expected draft, default or high, got '" + s.quality.v + "'");
+    }
   }
   if (s.cell_size.set && positive(c, s.cell_size, "magnetics.cell_size")) mg.cell_size = s.cell_size.v * c.L;
   if (s.theta.set) {

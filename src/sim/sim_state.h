@@ -43,6 +43,10 @@ struct FrameDiagnostics {
   double magnetics_seconds = 0;      ///< wall time in the magnetics library
   double rigid_seconds = 0;          ///< wall time in Bullet
   long long cells_visited = 0;       ///< cell pairs + node pairs evaluated, summed over substeps
+  long long cell_pairs = 0;          ///< of which cell-cell pairs in leaf blocks (magnetics::EvalStats)
+  long long node_pairs = 0;          ///< of which aggregated node-node dipole pairs
+  long long near_pairs = 0;          ///< cell pairs given the exact cuboid near field, summed
+  int evaluations = 0;               ///< magnetics evaluations (one per substep, one per frame)
   int induction_iterations = 0;      ///< GMRES iterations summed over substeps
   double induction_residual = 0;     ///< largest final residual over the substeps
   int substeps = 0;                  ///< physics substeps taken (more than nominal when refined)

@@ -63,6 +63,10 @@ void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
   state_.induced_moment = mag_state_.induced_moment;
   d.magnetics_seconds += seconds_since(t0);
   d.cells_visited += mag_result_.stats.cell_pairs + mag_result_.stats.node_pairs;
+  d.cell_pairs += mag_result_.stats.cell_pairs;
+  d.node_pairs += mag_result_.stats.node_pairs;
+  d.near_pairs += mag_result_.stats.near_pairs;
+  ++d.evaluations;
   d.induction_iterations += mag_result_.induction.iterations;
   d.induction_residual = std::max(d.induction_residual, mag_result_.induction.residual);
   d.magnetic_energy = mag_result_.energy;
