@@ -31,14 +31,15 @@ bakes="$build/paper_bakes"
 out="$results/paper"
 mkdir -p "$out" "$bakes"
 
-# label | scene | window start frame : frames | instants (frames where bodies touch or nearly touch)
+# label | scene | window start frame : frames | instants (frames where bodies touch or nearly
+# touch) | largest reference model (cells) the convergence ladder may build
 scenes=(
-  "TST|tst.yaml|64:6|66,70"
-  "BowlSpheres|bowl_spheres.yaml|40:6|40,70"
-  "Bowl2008|bowl_2008.yaml|40:6|40,70"
-  "SuperCube|supercube.yaml|10:6|10,30"
-  "DragonLow|dragon_low.yaml|20:3|20,40"
-  "DragonHigh|dragon_high.yaml|20:3|20,40"
+  "TST|tst.yaml|72:6|73,80|250000"
+  "BowlSpheres|bowl_spheres.yaml|40:6|40,70|150000"
+  "Bowl2008|bowl_2008.yaml|40:6|40,70|150000"
+  "SuperCube|supercube.yaml|5:6|7,34|250000"
+  "DragonLow|dragon_low.yaml|20:3|20,40|120000"
+  "DragonHigh|dragon_high.yaml|20:3|20,40|120000"
 )
 
 {
@@ -52,7 +53,7 @@ scenes=(
 } > "$out/machine.txt"
 
 for row in "${scenes[@]}"; do
-  IFS='|' read -r label scene window instants <<< "$row"
+  IFS='|' read -r label scene window instants max_ref <<< "$row"
   if [ ${#only[@]} -gt 0 ] && [[ ! " ${only[*]} " =~ " $label " ]]; then continue; fi
   file="$root/scenes/paper/$scene"
   name=$(basename "$scene" .yaml)
@@ -66,7 +67,8 @@ for row in "${scenes[@]}"; do
     cache=$(ls "$bakes/$name"/*.h5 | head -1)
   fi
   echo "== $label: measuring" >&2
-  "$driver" "$file" "$cache" "$out" --label "$label" --window "$window" --instants "$instants" --threads 1,0
+  "$driver" "$file" "$cache" "$out" --label "$label" --window "$window" --instants "$instants" --threads 1,0 \
+    --max-ref-cells "$max_ref"
 done
 echo "load after the run: $(cut -d' ' -f1-3 /proc/loadavg)" >> "$out/machine.txt"
 /usr/bin/python3 "$here/paper_table.py" "$results"

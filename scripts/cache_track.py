@@ -20,7 +20,7 @@ def main(argv):
     if not argv:
         print(__doc__, file=sys.stderr)
         return 2
-    with h5py.File(argv[0], "r") as f:
+    with h5py.File(argv[0], "r", swmr=True) as f:
         names = [n.decode() if isinstance(n, bytes) else str(n) for n in f["/bodies/name"][()]]
         pos = f["/particles/bodies/position/value"][()]
         vel = f["/particles/bodies/velocity/value"][()]
