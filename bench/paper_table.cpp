@@ -68,6 +68,8 @@ struct Args {
   std::vector<int> threads{1, 0};
   int gain_frames = 3;
   long long max_ref_cells = 400000;
+  std::string parts = "timing,gain,error";  ///< which measurements to run (results merge into the JSON)
+  bool wants(const std::string& part) const { return ("," + parts + ",").find("," + part + ",") != std::string::npos; }
 };
 
 Args parse_args(int argc, char** argv) {
@@ -90,13 +92,14 @@ Args parse_args(int argc, char** argv) {
     else if (k == "--threads") a.threads = parse_ints(val());
     else if (k == "--gain-frames") a.gain_frames = std::stoi(val());
     else if (k == "--max-ref-cells") a.max_ref_cells = std::stoll(val());
+    else if (k == "--parts") a.parts = val();
     else if (k.rfind("--", 0) == 0) throw std::runtime_error("unknown option " + k);
     else pos.push_back(k);
   }
   if (pos.size() != 3 || a.label.empty()) {
     throw std::runtime_error(
         "usage: paper_table SCENE.yaml CACHE.h5 OUT_DIR --label NAME --window F:N --instants F1,F2 "
-        "[--threads 1,0] [--gain-frames 3] [--max-ref-cells N]");
+        "[--threads 1,0] [--gain-frames 3] [--max-ref-cells N] [--parts timing,gain,error]");
   }
   a.scene = pos[0], a.cache = pos[1], a.out = pos[2];
   return a;
@@ -418,7 +421,14 @@ int main(int argc, char** argv) {
     if (cache.scene_hash() != sc.hash) throw std::runtime_error(a.cache + " was not baked from " + a.scene);
     const magnetics::Model model = scene::build_magnetics_model(sc);
 
-    json out;
+    // Results of earlier runs with other --parts are kept.
+    const std::filesystem::path json_path = std::filesystem::path(a.out) / (a.label + ".json");
+    json out = json::object();
+    if (std::filesystem::exists(json_path)) {
+      std::ifstream in(json_path);
+      out = json::parse(in, nullptr, false);
+      if (out.is_discarded()) out = json::object();
+    }
     out["label"] = a.label;
     out["scene"] = a.scene;
     out["cells"] = model.cell_count();
@@ -426,17 +436,29 @@ int main(int argc, char** argv) {
     out["dt_ms"] = 1e3 * sc.dt;
     out["window"] = {{"frame", a.window_frame}, {"frames", a.window_frames}};
     out["hardware_threads"] = hardware_threads();
-    out["timing"] = json::array();
-    for (int t : a.threads) {
-      const int n = t > 0 ? t : hardware_threads();
-      std::cerr << a.label << ": timing " << a.window_frames << " frames from frame " << a.window_frame << " on " << n
-                << " thread(s)\n";
-      out["timing"].push_back(time_window(sc, model, cache, a, n));
-      std::cerr << "  " << out["timing"].back().dump() << "\n";
+    if (a.wants("timing")) {
+      out["timing"] = json::array();
+      for (int t : a.threads) {
+        const int n = t > 0 ? t : hardware_threads();
+        std::cerr << a.label << ": timing " << a.window_frames << " frames from frame " << a.window_frame << " on " << n
+                  << " thread(s)\n";
+        out["timing"].push_back(time_window(sc, model, cache, a, n));
+        std::cerr << "  " << out["timing"].back().dump() << "\n";
+      }
+      std::ifstream load("/proc/loadavg");
+      std::string l1;
+      load >> l1;
+      out["load_after_timing"] = l1;
     }
-    std::cerr << a.label << ": gain\n";
-    out["gain"] = measure_gain(sc, model, cache, a);
-    std::cerr << "  " << out["gain"].dump() << "\n";
+    if (a.wants("gain")) {
+      std::cerr << a.label << ": gain\n";
+      out["gain"] = measure_gain(sc, model, cache, a);
+      std::cerr << "  " << out["gain"].dump() << "\n";
+    }
+    if (!a.wants("error")) {
+      std::ofstream(json_path) << out.dump(2) << "\n";
+      return 0;
+    }
 
     std::ofstream csv(std::filesystem::path(a.out) / (a.label + "_time_vs_error.csv"));
     csv << "scene,frame,setting,quality,cell_size_m,cells_per_extent,theta,near_field,cells,ms_per_eval_1thread,"
@@ -447,7 +469,7 @@ int main(int argc, char** argv) {
       std::cerr << a.label << ": run time against error at frame " << f << "\n";
       out["error"].push_back(error_at_instant(sc, cache, a, f, csv));
     }
-    std::ofstream(std::filesystem::path(a.out) / (a.label + ".json")) << out.dump(2) << "\n";
+    std::ofstream(json_path) << out.dump(2) << "\n";
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "paper_table: " << e.what() << "\n";

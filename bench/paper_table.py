@@ -57,6 +57,9 @@ def main(results):
     table = []
     for k in labels:
         res = json.load(open(os.path.join(src, k + ".json")))
+        if "timing" not in res or "gain" not in res or "error" not in res:
+            print(f"{k}: incomplete results (run the missing --parts), left out of the table", file=sys.stderr)
+            continue
         one, many = timing(res, True), timing(res, False)
         errs = errors(os.path.join(src, k + "_time_vs_error.csv"))
         default_err = [float(e["max_rel_force_error"]) for e in errs if e["setting"] == "default"]
@@ -120,6 +123,7 @@ def main(results):
     md.append("| scene | frame | setting | cells | ms per evaluation | max relative force error (per body) | RMS | "
               "max error over the largest force |")
     md.append("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    labels = [r["scene"] for r in table]
     for k in labels:
         for e in errors(os.path.join(src, k + "_time_vs_error.csv")):
             md.append(f"| {k} | {e['frame']} | {e['setting']} | {e['cells']} | {fmt(float(e['ms_per_eval_1thread']))} | "

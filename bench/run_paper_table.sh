@@ -4,9 +4,11 @@
 # shot's close-contact part (1 thread and all cores) and at two instants where bodies touch or
 # nearly touch, then writes the table, the per-scene CSVs and the Pareto plot.
 #
-# Usage: bench/run_paper_table.sh [build dir] [results dir] [--reuse] [--only LABEL ...]
+# Usage: bench/run_paper_table.sh [build dir] [results dir] [--reuse] [--only LABEL ...] [--parts P]
 #   --reuse   keep a shot's cache from an earlier run if it was baked from the same scene file
 #   --only    run only these labels (the table is still made from every result in the folder)
+#   --parts   timing,gain,error (default all): e.g. the slow error references first, then the
+#             timings alone on a quiet machine; results of separate runs are merged
 # Writes RESULTS/paper/<label>.json, <label>_time_vs_error.csv, bakes.txt, machine.txt, and
 # RESULTS/paper_table.md, paper_table.csv, paper_pareto.png (bench/paper_table.py).
 set -euo pipefail
@@ -17,10 +19,12 @@ results=${2:-bench/results}
 shift $(( $# > 2 ? 2 : $# ))
 reuse=0
 only=()
+parts=timing,gain,error
 while [ $# -gt 0 ]; do
   case "$1" in
     --reuse) reuse=1 ;;
     --only) shift; only+=("$1") ;;
+    --parts) shift; parts=$1 ;;
     *) echo "unknown option $1" >&2; exit 2 ;;
   esac
   shift
@@ -35,14 +39,15 @@ mkdir -p "$out" "$bakes"
 # touch) | largest reference model (cells) the convergence ladder may build
 scenes=(
   "TST|tst.yaml|72:6|73,80|250000"
-  "BowlSpheres|bowl_spheres.yaml|40:6|40,70|150000"
-  "Bowl2008|bowl_2008.yaml|40:6|40,70|150000"
+  "BowlSpheres|bowl_spheres.yaml|18:6|20,50|150000"
+  "Bowl2008|bowl_2008.yaml|24:6|26,60|150000"
   "SuperCube|supercube.yaml|5:6|7,34|250000"
-  "DragonLow|dragon_low.yaml|20:3|20,40|120000"
-  "DragonHigh|dragon_high.yaml|20:3|20,40|120000"
+  "DragonLow|dragon_low.yaml|20:3|15,30|120000"
+  "DragonHigh|dragon_high.yaml|20:3|15,30|120000"
 )
 
 {
+  echo "== run of parts=$parts"
   echo "date: $(date -u +%Y-%m-%dT%H:%MZ)"
   echo "commit: $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$root" diff --quiet 2>/dev/null || echo ' (with uncommitted changes)')"
   echo "cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores"
@@ -50,7 +55,7 @@ scenes=(
   echo "compiler: $(c++ --version | head -1)"
   echo "build: $(grep -E '^CMAKE_BUILD_TYPE' "$build/CMakeCache.txt" 2>/dev/null | cut -d= -f2)"
   echo "load before the run: $(cut -d' ' -f1-3 /proc/loadavg)"
-} > "$out/machine.txt"
+} >> "$out/machine.txt"
 
 for row in "${scenes[@]}"; do
   IFS='|' read -r label scene window instants max_ref <<< "$row"
@@ -62,13 +67,13 @@ for row in "${scenes[@]}"; do
     rm -rf "${bakes:?}/$name"
     echo "== $label: baking $scene" >&2
     start=$(date +%s)
-    "$magbake" --quiet bake "$file" -o "$bakes/$name"
+    "$magbake" --quiet bake "$file" -o "$bakes/$name" > "$bakes/$name.log" 2>&1
     echo "$label: baked $scene in $(( $(date +%s) - start )) s on $(nproc) threads" >> "$out/bakes.txt"
     cache=$(ls "$bakes/$name"/*.h5 | head -1)
   fi
   echo "== $label: measuring" >&2
   "$driver" "$file" "$cache" "$out" --label "$label" --window "$window" --instants "$instants" --threads 1,0 \
-    --max-ref-cells "$max_ref"
+    --max-ref-cells "$max_ref" --parts "$parts"
 done
 echo "load after the run: $(cut -d' ' -f1-3 /proc/loadavg)" >> "$out/machine.txt"
 /usr/bin/python3 "$here/paper_table.py" "$results"

@@ -26,7 +26,7 @@ digit_2.obj, digit_0.obj, digit_8.obj: the soft-iron characters of the "2008" sc
   DIGIT_THICKNESS = 6 thick (z, from -3 to 3), readable from +z with x to the right and y up,
   bounding box centred at the origin. Strokes are DIGIT_STROKE = 4 wide with round ends: the
   outline is the zero level of the distance to the stroke centre lines minus 2, traced by marching
-  squares on a DIGIT_GRID = 0.05 mm grid and simplified to DIGIT_TOLERANCE = 0.004 mm (so every
+  squares on a DIGIT_GRID = 0.05 mm grid and simplified to DIGIT_TOLERANCE = 0.03 mm (so every
   curve has dozens of points; corners the tracing cut off are restored); the caps are ear-clipped
   with the holes bridged. "0": an oval ring (centre line an ellipse of semi-axes 6 x 10), one hole.
   "8": two stacked rings (lower centre line an ellipse 6 x 5.25 around y = -4.75, upper 5 x 4.75
@@ -67,7 +67,7 @@ BOWL_SEGMENTS, BOWL_N_INNER, BOWL_N_OUTER, BOWL_N_FOOT = 48, 18, 16, 3
 
 # Digits.
 DIGIT_HEIGHT, DIGIT_WIDTH, DIGIT_THICKNESS, DIGIT_STROKE = 24.0, 16.0, 6.0, 4.0
-DIGIT_GRID, DIGIT_TOLERANCE = 0.05, 0.004
+DIGIT_GRID, DIGIT_TOLERANCE = 0.05, 0.03
 
 # Dragon.
 DRAGON_LENGTH, DRAGON_GRID, DRAGON_TRIANGLES = 100.0, 2.0, 7000
