@@ -42,8 +42,8 @@ scenes=(
   "BowlSpheres|bowl_spheres.yaml|18:6|20,50|150000"
   "Bowl2008|bowl_2008.yaml|24:6|26,60|150000"
   "SuperCube|supercube.yaml|5:6|7,34|250000"
-  "DragonLow|dragon_low.yaml|20:3|15,30|120000"
-  "DragonHigh|dragon_high.yaml|20:3|15,30|120000"
+  "DragonLow|dragon_low.yaml|10:3|8,15|60000"
+  "DragonHigh|dragon_high.yaml|10:3|8,15|60000"
 )
 
 {

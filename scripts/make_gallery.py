@@ -14,11 +14,11 @@ from PIL import Image
 FRAMES = {
     "tst": 85,           # snapped: the left toy magnet against the sphere
     "tst_same": 30,
-    "bowl_spheres": 55,  # the cluster hanging under the lifted magnet
-    "bowl_2008": 65,     # the characters carried above the rim
+    "bowl_spheres": 40,  # the cluster hanging under the magnet as it is lifted
+    "bowl_2008": 48,     # the characters carried out of the bowl
     "supercube": 30,     # levitating
-    "dragon_low": 31,    # balls held on the dragon
-    "dragon_high": 31,
+    "dragon_low": 16,    # balls held on the dragon
+    "dragon_high": 16,
     "field_lines": 1,
 }
 
