@@ -360,8 +360,10 @@ json error_at_instant(const scene::Scene& sc, const io::CacheReader& cache, cons
               << largest_force(e.result) << " N, change " << change << ", induction "
               << e.result.induction.iterations << " it, residual " << e.result.induction.residual << "\n";
     prev = e;
-    ref = e;
-    if (!std::isnan(change) && change < 0.005 && e.result.induction.converged) {
+    // A level whose induction solve did not converge is reported but never becomes the reference.
+    if (e.result.induction.converged || !ref) ref = e;
+    if (!e.result.induction.converged) break;
+    if (!std::isnan(change) && change < 0.005) {
       converged = true;
       break;
     }

@@ -39,8 +39,8 @@ mkdir -p "$out" "$bakes"
 # touch) | largest reference model (cells) the convergence ladder may build
 scenes=(
   "TST|tst.yaml|72:6|73,80|250000"
-  "BowlSpheres|bowl_spheres.yaml|18:6|20,50|150000"
-  "Bowl2008|bowl_2008.yaml|24:6|26,60|150000"
+  "BowlSpheres|bowl_spheres.yaml|18:6|20,50|6000"
+  "Bowl2008|bowl_2008.yaml|24:6|26,60|40000"
   "SuperCube|supercube.yaml|5:6|7,34|250000"
   "DragonLow|dragon_low.yaml|10:3|8,15|60000"
   "DragonHigh|dragon_high.yaml|10:3|8,15|60000"
