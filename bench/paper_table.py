@@ -49,6 +49,16 @@ def timing(res, threads_one):
     return max(rows, key=lambda r: r["threads"])
 
 
+def is_reference(src, k, e):
+    """The `high` preset is the ladder's first level; when the ladder stopped there, comparing it
+    with the reference measures nothing."""
+    path = os.path.join(src, k + ".json")
+    if e["setting"] != "high" or not os.path.exists(path):
+        return False
+    res = json.load(open(path))
+    return any(str(i["frame"]) == e["frame"] and i["reference_label"] == "ref r2 th0.3" for i in res.get("error", []))
+
+
 def errors(path):
     if not os.path.exists(path):
         return []
@@ -131,7 +141,8 @@ def main(results):
     labels = [k for k in PAPER if os.path.exists(os.path.join(src, k + "_time_vs_error.csv"))]
     for k in labels:
         for e in errors(os.path.join(src, k + "_time_vs_error.csv")):
-            md.append(f"| {k} | {e['frame']} | {e['setting']} | {e['cells']} | {fmt(float(e['ms_per_eval_1thread']))} | "
+            same = " (= the reference)" if is_reference(src, k, e) else ""
+            md.append(f"| {k} | {e['frame']} | {e['setting']}{same} | {e['cells']} | {fmt(float(e['ms_per_eval_1thread']))} | "
                       f"{100 * float(e['max_rel_force_error']):.3g}% | {100 * float(e['rms_rel_force_error']):.3g}% | "
                       f"{100 * float(e['max_error_over_largest_force']):.3g}% |")
     md.append("")
@@ -160,7 +171,7 @@ def main(results):
     fig, ax = plt.subplots(figsize=(8, 5.5))
     markers = "osD^v<>"
     for i, k in enumerate(labels):
-        errs = errors(os.path.join(src, k + "_time_vs_error.csv"))
+        errs = [e for e in errors(os.path.join(src, k + "_time_vs_error.csv")) if not is_reference(src, k, e)]
         xs = [float(e["ms_per_eval_1thread"]) for e in errs]
         ys = [max(float(e["max_rel_force_error"]), 1e-6) for e in errs]
         line = ax.scatter(xs, ys, marker=markers[i % len(markers)], label=k, alpha=0.8)
@@ -168,10 +179,11 @@ def main(results):
             if e["setting"] == "default":
                 ax.annotate("default", (x, y), fontsize=6, color=line.get_facecolor()[0],
                             xytext=(3, 3), textcoords="offset points")
-    ax.axhline(0.03, color="grey", lw=0.8, ls="--")
-    ax.text(ax.get_xlim()[0], 0.031, " 3% (the design target at default)", fontsize=7, color="grey", va="bottom")
     ax.set_xscale("log")
     ax.set_yscale("log")
+    ax.axhline(0.03, color="grey", lw=0.8, ls="--")
+    ax.text(0.02, 0.031, "3% (the design target at default)", fontsize=7, color="grey", va="bottom",
+            transform=ax.get_yaxis_transform())
     ax.set_xlabel("time per magnetics evaluation, 1 thread (ms)")
     ax.set_ylabel("max relative force error vs converged reference")
     ax.set_title("magbake on the paper's scenes: run time against force error")
