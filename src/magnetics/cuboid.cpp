@@ -5,6 +5,7 @@
 #include <bit>
 #include <cassert>
 #include <cmath>
+#include <limits>
 
 namespace magbake::magnetics {
 namespace {
@@ -18,8 +19,11 @@ inline double log_plus_r(double a, double R, double q2) {
 }
 
 // H (in units of sigma / 4pi) at p of the rectangle u in [u0,u1], v in [v0,v1] in the plane
-// w = w0, charge density 1; p in (u, v, w) coordinates; result in (u, v, w) components.
-Vec3 rectangle_h(double pu, double pv, double pw, double u0, double u1, double v0, double v1, double w0) {
+// w = w0, charge density 1; p in (u, v, w) coordinates; result in (u, v, w) components. With
+// `phi`, also adds the scalar potential (same units, H = -grad phi): the corner antiderivative
+// X ln(Y + R) + Y ln(X + R) - Z atan(XY / (ZR)) reuses the logarithms and arctangent of H.
+Vec3 rectangle_h(double pu, double pv, double pw, double u0, double u1, double v0, double v1, double w0,
+                 double* phi = nullptr) {
   Vec3 h = Vec3::Zero();
   const double Z = pw - w0;
   const double Z2 = Z * Z;
@@ -30,10 +34,14 @@ Vec3 rectangle_h(double pu, double pv, double pw, double u0, double u1, double v
       const double s = (a == b) ? 1.0 : -1.0;
       const double X = us[a], Y = vs[b];
       const double R = std::sqrt(X * X + Y * Y + Z2);
-      h[0] -= s * log_plus_r(Y, R, X * X + Z2);
-      h[1] -= s * log_plus_r(X, R, Y * Y + Z2);
+      const double ly = log_plus_r(Y, R, X * X + Z2), lx = log_plus_r(X, R, Y * Y + Z2);
       // atan(XY / (Z R)), odd in Z; Z = 0 gives the in-plane limit sign(XY) pi/2 (from Z > 0).
-      h[2] += s * (Z >= 0.0 ? std::atan2(X * Y, Z * R) : std::atan2(-X * Y, -Z * R));
+      const double at = Z >= 0.0 ? std::atan2(X * Y, Z * R) : std::atan2(-X * Y, -Z * R);
+      h[0] -= s * ly;
+      h[1] -= s * lx;
+      h[2] += s * at;
+      // X ln(..) -> 0 where the logarithm diverges (X -> 0 on an edge's extension).
+      if (phi) *phi += s * ((X != 0.0 ? X * ly : 0.0) + (Y != 0.0 ? Y * lx : 0.0) - Z * at);
     }
   }
   return h;
@@ -104,22 +112,38 @@ int parallel_axis(const Vec3& e) {
   return -1;
 }
 
-}  // namespace
-
-Vec3 cuboid_h_field(const Vec3& half, const Vec3& M, const Vec3& x) {
+// H (A/m) and, with `phi`, the scalar potential (A) of a cuboid at x (cuboid frame).
+Vec3 cuboid_h_and_potential(const Vec3& half, const Vec3& M, const Vec3& x, double* phi) {
   Vec3 H = Vec3::Zero();
+  double p = 0.0;
   for (int w = 0; w < 3; ++w) {
     if (M[w] == 0.0) continue;
     const int u = (w + 1) % 3, v = (w + 2) % 3;
     for (int side = -1; side <= 1; side += 2) {
-      const Vec3 h = rectangle_h(x[u], x[v], x[w], -half[u], half[u], -half[v], half[v], side * half[w]);
+      double pf = 0.0;
+      const Vec3 h = rectangle_h(x[u], x[v], x[w], -half[u], half[u], -half[v], half[v], side * half[w],
+                                 phi ? &pf : nullptr);
       const double sigma = side * M[w];
       H[u] += sigma * h[0];
       H[v] += sigma * h[1];
       H[w] += sigma * h[2];
+      p += sigma * pf;
     }
   }
+  if (phi) *phi = kInv4Pi * p;
   return kInv4Pi * H;
+}
+
+}  // namespace
+
+Vec3 cuboid_h_field(const Vec3& half, const Vec3& M, const Vec3& x) {
+  return cuboid_h_and_potential(half, M, x, nullptr);
+}
+
+double cuboid_potential(const Vec3& half, const Vec3& M, const Vec3& x) {
+  double phi = 0.0;
+  cuboid_h_and_potential(half, M, x, &phi);
+  return phi;
 }
 
 Mat3 cuboid_h_tensor(const Vec3& half, const Vec3& x) {
@@ -153,7 +177,7 @@ Vec3 cuboid_b_field(const Vec3& half, const Vec3& M, const Vec3& x) {
   return B;
 }
 
-void cuboid_pair(const Cuboid& k, const Cuboid& i, int order, Vec3& force, Vec3& torque) {
+void cuboid_pair(const Cuboid& k, const Cuboid& i, int order, Vec3& force, Vec3& torque, double* energy) {
   // Work in i's frame: k's centre, axes and magnetization there.
   const Mat3 Rit = i.rotation.transpose();
   const Vec3 ck = Rit * (k.center - i.center);
@@ -163,6 +187,7 @@ void cuboid_pair(const Cuboid& k, const Cuboid& i, int order, Vec3& force, Vec3&
   const double scale = std::max({k.half.maxCoeff(), i.half.maxCoeff()});
 
   Vec3 F = Vec3::Zero(), T = Vec3::Zero();
+  double E = 0.0;
   for (int w = 0; w < 3; ++w) {
     if (Mk_local[w] == 0.0) continue;
     const int u = (w + 1) % 3, v = (w + 2) % 3;
@@ -206,10 +231,13 @@ void cuboid_pair(const Cuboid& k, const Cuboid& i, int order, Vec3& force, Vec3&
             for (int q = 0; q < rule.n; ++q) {
               const double s = u0 + du * rule.x[p], t = v0 + dv * rule.x[q];
               const Vec3 x = fc + s * eu + t * ev;
-              const Vec3 B = kMu0 * cuboid_h_field(i.half, Mi, x);
-              const Vec3 dF = (sigma * rule.w[p] * rule.w[q] * du * dv) * B;
+              double phi = 0.0;
+              const Vec3 B = kMu0 * cuboid_h_and_potential(i.half, Mi, x, energy ? &phi : nullptr);
+              const double wq = sigma * rule.w[p] * rule.w[q] * du * dv;
+              const Vec3 dF = wq * B;
               F += dF;
               T += (x - ck).cross(dF);
+              E += wq * phi;
             }
           }
         }
@@ -218,6 +246,36 @@ void cuboid_pair(const Cuboid& k, const Cuboid& i, int order, Vec3& force, Vec3&
   }
   force = i.rotation * F;
   torque = i.rotation * T;
+  if (energy) *energy = kMu0 * E;
+}
+
+bool cuboid_overlap_shift(const Cuboid& k, const Cuboid& i, Vec3& shift) {
+  shift.setZero();
+  const Vec3 d = k.center - i.center;
+  double best = std::numeric_limits<double>::infinity();
+  Vec3 axis = Vec3::Zero();
+  auto test = [&](Vec3 L) {
+    const double n = L.norm();
+    if (n < 1e-9) return true;  // parallel edges: the face axes already cover this direction
+    L /= n;
+    const double rk = (k.rotation.transpose() * L).cwiseAbs().dot(k.half);
+    const double ri = (i.rotation.transpose() * L).cwiseAbs().dot(i.half);
+    const double along = L.dot(d);
+    const double overlap = rk + ri - std::abs(along);
+    if (overlap <= 0.0) return false;  // a separating axis
+    if (overlap < best) best = overlap, axis = along >= 0.0 ? L : Vec3(-L);
+    return true;
+  };
+  for (int a = 0; a < 3; ++a) {
+    if (!test(k.rotation.col(a)) || !test(i.rotation.col(a))) return false;
+  }
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) {
+      if (!test(k.rotation.col(a).cross(i.rotation.col(b)))) return false;
+    }
+  }
+  shift = best * axis;
+  return true;
 }
 
 Mat3 cuboid_mean_field_tensor(const Cuboid& target, const Cuboid& source, int order) {

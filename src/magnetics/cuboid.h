@@ -16,6 +16,10 @@ namespace magbake::magnetics {
 /// Exact everywhere except on the charged faces themselves (where the caller picks a side).
 Vec3 cuboid_h_field(const Vec3& half, const Vec3& M, const Vec3& x);
 
+/// Magnetic scalar potential (A) at x (cuboid frame) of the same cuboid: H = -grad phi outside
+/// (closed form, from the same corner terms as cuboid_h_field).
+double cuboid_potential(const Vec3& half, const Vec3& M, const Vec3& x);
+
 /// The full field tensor N at x (cuboid frame): H(x) = N M for any magnetization M. Per cuboid
 /// vertex three logarithms and three arctangents (cheaper than three cuboid_h_field calls).
 Mat3 cuboid_h_tensor(const Vec3& half, const Vec3& x);
@@ -35,7 +39,16 @@ struct Cuboid {
 /// Surface-charge integral over k's charged faces of i's closed-form field, Gauss–Legendre of
 /// order `order` per edge with end-point clustering; faces are split along i's face edges when
 /// the two cuboids are parallel, so coplanar contact converges. The cuboids must not overlap.
-void cuboid_pair(const Cuboid& k, const Cuboid& i, int order, Vec3& force, Vec3& torque);
+/// With `energy`, also the interaction energy (J) -mu0 int M_k.H_i dV = mu0 oint sigma_k phi_i dA
+/// by the same quadrature, so the force is its negative gradient to quadrature accuracy.
+void cuboid_pair(const Cuboid& k, const Cuboid& i, int order, Vec3& force, Vec3& torque, double* energy = nullptr);
+
+/// Minimum translation that separates two overlapping cuboids (separating-axis test over the 15
+/// box axes): returns true and sets `shift` (world, m) when k overlaps i, so that k moved by
+/// `shift` just touches i; false (shift zero) when they are apart or touch. Close-range callers
+/// evaluate overlapping cells (bodies penetrating by a contact solver's tolerance) at the
+/// touching pose, so the near field stays continuous through contact.
+bool cuboid_overlap_shift(const Cuboid& k, const Cuboid& i, Vec3& shift);
 
 /// Mean field tensor N (world frame, dimensionless): the H field of `source` averaged over the
 /// volume of `target` is N * M_source. With target == source this is minus the cuboid's own

@@ -52,13 +52,23 @@ int near_correction(const Model& m, const Settings& st, const State& s, int ta, 
       // integrand is smooth there and 3 already beats the dipole by two orders of magnitude).
       const double dist = rc.norm() / (hk + m.cell_half[i].maxCoeff());
       const int order = dist < 1.5 ? st.near_field_order : dist < 2.5 ? std::max(3, st.near_field_order - 1) : 3;
+      // Cells of penetrating bodies (a contact solver's tolerance) overlap: evaluate them at
+      // the touching pose and continue the energy linearly, so force and energy stay continuous
+      // through contact and the force stays the energy's gradient along the push-out direction.
+      Vec3 shift;
+      const bool overlap = cuboid_overlap_shift(cub_k, cub_i, shift);
+      if (overlap) cub_k.center += shift;
       Vec3 F, T;
-      cuboid_pair(cub_k, cub_i, std::min(order, st.near_field_order), F, T);
+      double E = 0.0;
+      cuboid_pair(cub_k, cub_i, std::min(order, st.near_field_order), F, T, &E);
+      if (overlap) E += F.dot(shift);
       const Vec3 rp = delta + s.cell_offset[k] - s.cell_offset[i];
       const DipolePair dp = dipole_pair(rp, mk, mi, m.cell_clamp[k] + m.cell_clamp[i]);
-      // Replace the dipole pair the block kernel added by the cuboid pair (torques about body a's origin).
+      // Replace the dipole pair the block kernel added by the cuboid pair (torques about body a's
+      // origin), energy included, so that near contact the force stays -grad of the energy.
       out.force += F - dp.force;
       out.torque += ck.cross(F) + T - (s.cell_offset[k].cross(dp.force) + dp.torque);
+      out.energy += E - dp.energy;
       ++count;
     }
   }

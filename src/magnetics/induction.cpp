@@ -193,6 +193,7 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
   auto store = [&](const Vector& x) {
     s.induced_moment.resize(m.induced_cells.size());
     for (int q = 0; q < n; ++q) s.induced_moment[t.original[q]] = x.segment<3>(3 * q);
+    s.induced_rotation = s.body_rotation;
   };
   const double bnorm = std::sqrt(dot(b, b));
   if (st.induction == InductionMode::kPaper || bnorm == 0.0) {
@@ -215,17 +216,47 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
     }
   };
 
-  // Warm start from the previous moments when they exist, else from the one-pass answer.
+  // Right preconditioner z = M^-1 v: each factored block (one body's consecutive induced cells,
+  // body frame) applied in the body's current orientation. Identity without blocks.
+  const bool precondition = st.induction_preconditioner && !m.precond_lu.empty();
+  std::vector<int> q_of_rank;
+  if (precondition) {
+    q_of_rank.assign(n, 0);
+    for (int q = 0; q < n; ++q) q_of_rank[t.original[q]] = q;
+  }
+  auto apply_precond = [&](const Vector& v, Vector& z) {
+    if (!precondition) {
+      z = v;
+      return;
+    }
+    z.resize(3 * n);
+    parallel_for_each(static_cast<int>(m.precond_lu.size()), 1, [&](int k) {
+      const int r0 = m.precond_begin[k], nb = m.precond_begin[k + 1] - r0;
+      const Mat3& R = s.body_rotation[m.cell_body[m.induced_cells[r0]]];
+      Eigen::VectorXd local(3 * nb);
+      for (int a = 0; a < nb; ++a) local.segment<3>(3 * a) = R.transpose() * v.segment<3>(3 * q_of_rank[r0 + a]);
+      local = m.precond_lu[k].solve(local);
+      for (int a = 0; a < nb; ++a) z.segment<3>(3 * q_of_rank[r0 + a]) = R * local.segment<3>(3 * a);
+    });
+  };
+
+  // Warm start from the previous moments when they exist (turned with their bodies since they
+  // were written), else from the one-pass answer.
   Vector x(3 * n);
   bool warm = s.induced_moment.size() == m.induced_cells.size();
-  for (int q = 0; q < n && warm; ++q) x.segment<3>(3 * q) = s.induced_moment[t.original[q]];
+  const bool turn = s.induced_rotation.size() == s.body_rotation.size();
+  for (int q = 0; q < n && warm; ++q) {
+    const Vec3& prev = s.induced_moment[t.original[q]];
+    const int b = m.cell_body[t.cell[q]];
+    x.segment<3>(3 * q) = turn ? Vec3(s.body_rotation[b] * (s.induced_rotation[b].transpose() * prev)) : prev;
+  }
   if (!warm || dot(x, x) == 0.0) x = b;
 
   // Restarted GMRES (modified Gram–Schmidt, Givens rotations).
   const int restart = std::max(2, st.induction_restart);
   std::vector<Vector> V(restart + 1);
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(restart + 1, restart);
-  Vector cs(restart), sn(restart), g(restart + 1), r, w;
+  Vector cs(restart), sn(restart), g(restart + 1), r, w, z;
   apply(x, r);
   r = b - r;
   double beta = std::sqrt(dot(r, r));
@@ -237,7 +268,8 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
     g[0] = beta;
     int j = 0;
     while (j < restart && it < st.induction_max_iterations) {
-      apply(V[j], w);
+      apply_precond(V[j], z);
+      apply(z, w);
       for (int i = 0; i <= j; ++i) {
         H(i, j) = dot(w, V[i]);
         w -= H(i, j) * V[i];
@@ -259,9 +291,12 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
       ++j, ++it;
       if (std::abs(g[j]) / bnorm <= st.induction_tolerance) break;
     }
-    // x += V y with H y = g (upper triangular, j x j).
+    // x += M^-1 V y with H y = g (upper triangular, j x j).
     const Vector y = H.topLeftCorner(j, j).triangularView<Eigen::Upper>().solve(g.head(j));
-    for (int i = 0; i < j; ++i) x += y[i] * V[i];
+    Vector u = Vector::Zero(3 * n);
+    for (int i = 0; i < j; ++i) u += y[i] * V[i];
+    apply_precond(u, z);
+    x += z;
     apply(x, r);
     r = b - r;
     beta = std::sqrt(dot(r, r));

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/LU>
+
 #include "material.h"
 #include "solid.h"
 #include "types.h"
@@ -35,6 +37,9 @@ struct BuildSettings {
   /// Induced cells closer than this many cell sizes interact through the exact mean field of
   /// their cuboids in the induction solve (point dipoles beyond). 0 = point dipoles only.
   double induction_near = 2.0;
+  /// Induced cells per block of the induction preconditioner (consecutive cells of one body,
+  /// hierarchy order; each block's operator is factored once). 0 = no preconditioner.
+  int induction_block = 512;
 };
 
 /// Per-part statistics of the decomposition.
@@ -92,6 +97,12 @@ struct Model {
   std::vector<int> near_begin;           ///< (ninduced + 1)
   std::vector<int> near_cell;            ///< source cell of each entry (same body)
   std::vector<Mat3> near_tensor;         ///< T/(A·m²), body frame
+
+  // ---- induction preconditioner (rigid, so factored once): block k covers the induced ranks
+  // [precond_begin[k], precond_begin[k+1]) of one body; precond_lu[k] factors that block of the
+  // coupled operator I - P/mu0 (T_dipole + near rows) in the body frame (3 rows per cell).
+  std::vector<int> precond_begin;        ///< (nblock + 1) induced ranks
+  std::vector<Eigen::PartialPivLU<Eigen::MatrixXd>> precond_lu;  ///< (nblock)
 
   // ---- hierarchy nodes (nnode); children of node n are node_child[n] .. + node_nchild[n] - 1
   std::vector<int> node_begin, node_end; ///< (nnode) cell range

@@ -82,6 +82,9 @@ struct State {
   std::vector<Pose> body_pose;        ///< (nbody) body frame -> world; input
 
   std::vector<Vec3> induced_moment;   ///< (ninduced) world, A·m²; output and next warm start
+  /// (nbody) each body's rotation when induced_moment was written; the warm start turns the
+  /// moments with their bodies. Empty: written at the current rotations (a restored state).
+  std::vector<Mat3> induced_rotation;
 
   // ---- derived each evaluation (world frame)
   std::vector<Vec3> cell_offset;      ///< (ncell x 3) cell position minus body origin, m

@@ -48,6 +48,7 @@ void place(const Model& m, State& s, const std::vector<Vec3>& induced) {
   s.total.cell = s.permanent.cell;
   if (induced.size() == m.induced_cells.size()) {
     s.induced_moment = induced;
+    s.induced_rotation = s.body_rotation;
     for (std::size_t q = 0; q < m.induced_cells.size(); ++q) s.total.cell[m.induced_cells[q]] += induced[q];
   }
   s.total.aggregate(m);

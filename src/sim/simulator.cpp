@@ -47,7 +47,10 @@ void Simulator::restore(const SimState& s, int frame) {
   state_ = s;
   world_->set_state(state_);
   frame_ = frame;
-  if (state_.induced_moment.size() == model_.induced_cells.size()) mag_state_.induced_moment = state_.induced_moment;
+  if (state_.induced_moment.size() == model_.induced_cells.size()) {
+    mag_state_.induced_moment = state_.induced_moment;
+    mag_state_.induced_rotation.clear();  // written at the restored poses
+  }
   FrameDiagnostics d;
   evaluate_magnetics(d);
 }

@@ -61,6 +61,87 @@ TEST(CuboidPair, MatchesAkounYonnetForAlignedCubes) {
   }
 }
 
+TEST(CuboidField, PotentialIsTheFieldsAntiGradient) {
+  // H = -grad phi at points outside, near and on the extension of edges; central differences.
+  const Vec3 h(0.002, 0.003, 0.001);
+  const Vec3 M(1e5, -2e5, 3e5);
+  const double d = 1e-7;
+  for (const Vec3& x : {Vec3(0.004, 0.001, 0.0005), Vec3(0.0021, 0.0031, 0.0011), Vec3(0.0, 0.0, 0.0015),
+                        Vec3(0.002, 0.0035, 0.0), Vec3(-0.01, 0.02, 0.005)}) {
+    Vec3 g;
+    for (int a = 0; a < 3; ++a) {
+      const Vec3 e = Vec3::Unit(a) * d;
+      g[a] = -(cuboid_potential(h, M, x + e) - cuboid_potential(h, M, x - e)) / (2 * d);
+    }
+    const Vec3 H = cuboid_h_field(h, M, x);
+    EXPECT_LT((g - H).norm(), 1e-6 * H.norm()) << x.transpose();
+  }
+  // Far away: the potential of a point dipole, m.r / (4 pi r^3).
+  const Vec3 x(0.3, -0.2, 0.5);
+  const double ref = (M * 8.0 * h.prod()).dot(x) / (4 * std::numbers::pi * std::pow(x.norm(), 3));
+  EXPECT_NEAR(cuboid_potential(h, M, x), ref, 1e-4 * std::abs(ref));
+}
+
+TEST(CuboidPair, EnergyIsTheForcesPotentialDownToContact) {
+  // Aligned unit cubes (as at magnet contact) and a rotated pair: F = -dE/dx along every axis
+  // by central differences of the quadrature energy, and -m.B far away.
+  const double a = 0.5e-3;
+  const Vec3 h(a, a, a);
+  const Mat3 I = Mat3::Identity();
+  const Vec3 Mz(0, 0, 1.0 / kMu0);
+  const Mat3 R = Quat(Eigen::AngleAxisd(0.4, Vec3(1, 2, 0.5).normalized())).toRotationMatrix();
+  struct Case {
+    Vec3 off;
+    Mat3 rot;
+    double tol;
+  };
+  for (const Case& c : {Case{Vec3(0, 0, 2.05 * a), I, 2e-3}, Case{Vec3(0.6 * a, 0.4 * a, 2.2 * a), I, 2e-3},
+                        Case{Vec3(2.2 * a, 0, 2.2 * a), I, 2e-3}, Case{Vec3(0.5 * a, -0.3 * a, 3.2 * a), R, 5e-3}}) {
+    auto energy = [&](const Vec3& off) {
+      Vec3 F, T;
+      double E = 0;
+      cuboid_pair(Cuboid{off, c.rot, h, c.rot * Mz}, Cuboid{Vec3::Zero(), I, h, Mz}, 8, F, T, &E);
+      return E;
+    };
+    Vec3 F, T;
+    double E = 0;
+    cuboid_pair(Cuboid{c.off, c.rot, h, c.rot * Mz}, Cuboid{Vec3::Zero(), I, h, Mz}, 8, F, T, &E);
+    const double d = 1e-4 * a;
+    Vec3 g;
+    for (int k = 0; k < 3; ++k) g[k] = -(energy(c.off + d * Vec3::Unit(k)) - energy(c.off - d * Vec3::Unit(k))) / (2 * d);
+    EXPECT_LT((g - F).norm(), c.tol * F.norm()) << c.off.transpose() / a;
+  }
+  const Vec3 far(0.01, 0.004, 0.02);
+  Vec3 F, T;
+  double E = 0;
+  cuboid_pair(Cuboid{far, I, h, Mz}, Cuboid{Vec3::Zero(), I, h, Mz}, 4, F, T, &E);
+  const double m = 8 * h.prod() / kMu0;
+  const double ref = -Vec3(0, 0, m).dot(dipole_field(far, Vec3(0, 0, m)));
+  EXPECT_NEAR(E, ref, 1e-4 * std::abs(ref));
+}
+
+TEST(CuboidPair, OverlapShiftSeparatesToTouching) {
+  const Vec3 h(0.001, 0.001, 0.001);
+  const Mat3 I = Mat3::Identity();
+  Vec3 shift;
+  // Aligned, 0.1 mm deep along z (offset 0.3 mm in x): pushed out along +z by the depth.
+  ASSERT_TRUE(cuboid_overlap_shift(Cuboid{Vec3(0.0003, 0, 0.0019), I, h, Vec3::Zero()},
+                                   Cuboid{Vec3::Zero(), I, h, Vec3::Zero()}, shift));
+  EXPECT_LT((shift - Vec3(0, 0, 0.0001)).norm(), 1e-12);
+  // Apart or exactly touching: no shift.
+  EXPECT_FALSE(cuboid_overlap_shift(Cuboid{Vec3(0, 0, 0.0021), I, h, Vec3::Zero()},
+                                    Cuboid{Vec3::Zero(), I, h, Vec3::Zero()}, shift));
+  EXPECT_FALSE(cuboid_overlap_shift(Cuboid{Vec3(0, 0, 0.002), I, h, Vec3::Zero()},
+                                    Cuboid{Vec3::Zero(), I, h, Vec3::Zero()}, shift));
+  // Rotated: after the shift the two touch (a second test finds no overlap beyond round-off).
+  const Mat3 R = Quat(Eigen::AngleAxisd(0.5, Vec3(1, 1, 0).normalized())).toRotationMatrix();
+  Cuboid k{Vec3(0.0005, 0.0002, 0.0018), R, Vec3(0.0008, 0.0012, 0.0006), Vec3::Zero()};
+  const Cuboid i{Vec3::Zero(), I, h, Vec3::Zero()};
+  ASSERT_TRUE(cuboid_overlap_shift(k, i, shift));
+  k.center += shift * (1 + 1e-9);
+  EXPECT_FALSE(cuboid_overlap_shift(k, i, shift));
+}
+
 TEST(CuboidPair, ConservesMomentumAndIsFrameIndependent) {
   // Rotated, non-cubic, differently magnetized cuboids: F_ki = -F_ik and the torques balance
   // (to the quadrature error), and rotating the whole configuration rotates the answer.
