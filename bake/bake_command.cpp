@@ -1,5 +1,6 @@
 // magbake bake: scene -> HDF5 cache (and, as their commands land, field volumes and previews).
 #include <spdlog/spdlog.h>
+#include <spdlog/fmt/fmt.h>
 
 #include <chrono>
 #include <cstdlib>
@@ -13,6 +14,7 @@
 #include "io/cache.h"
 #include "progress.h"
 #include "scene/scene_magnetics.h"
+#include "sim/health.h"
 #include "sim/simulator.h"
 
 namespace magbake::cli {
@@ -57,7 +59,7 @@ fs::path cache_path_for(const scene::Scene& s, const std::string& out_dir) {
 }
 
 int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
-             const Global& g) {
+             const Global& g, bool strict) {
   auto loaded = load_or_report(path);
   if (!loaded) return kUsage;
   const scene::Scene& s = *loaded;
@@ -79,6 +81,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
   const fs::path partial = fs::path(cache.string() + ".partial");
   const fs::path dir = cache.parent_path().empty() ? fs::path(".") : cache.parent_path();
   std::error_code ec;
+  std::vector<std::string> warnings;  // summarized at the end (--strict: exit 1)
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) {
     spdlog::error("cannot create the output folder '{}': {}", dir.string(), ec ? ec.message() : "not a folder");
@@ -140,6 +143,13 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
       writer = std::make_unique<io::CacheWriter>(writing.string(), s, model, MAGBAKE_VERSION);
       simulator.initialize();
       next_frame = s.first_frame;
+      for (const auto& o : simulator.initial_overlaps()) {
+        warnings.push_back(fmt::format("'{}' and '{}' started {:.3g} mm inside each other; moved apart before frame {} "
+                                       "(positions only, no velocity added)",
+                                       s.bodies[o.a].name, o.b >= 0 ? s.bodies[o.b].name : "?", 1e3 * o.depth,
+                                       s.first_frame));
+        spdlog::warn("{}", warnings.back());
+      }
     }
   } catch (const std::exception& e) {
     spdlog::error("cannot start the cache: {}", e.what());
@@ -147,6 +157,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
   }
 
 
+  sim::HealthMonitor health(s, simulator.state());
   Progress progress("bake " + s.name, last - first + 1, g.quiet);
   const auto t0 = std::chrono::steady_clock::now();
   double magnetics_seconds = 0, rigid_seconds = 0;
@@ -179,6 +190,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
         return kInterrupted;
       }
       const sim::FrameDiagnostics d = simulator.advance_frame();
+      health.observe(simulator.frame(), simulator.state(), d);
       magnetics_seconds += d.magnetics_seconds;
       rigid_seconds += d.rigid_seconds;
       if (simulator.frame() >= first) {
@@ -223,6 +235,11 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   spdlog::info("wrote {} ({} frames) in {:.2f} s: magnetics {:.2f} s, rigid bodies {:.2f} s", cache.string(), written,
                wall, magnetics_seconds, rigid_seconds);
+  for (const std::string& w : health.warnings()) warnings.push_back(w), spdlog::warn("{}", w);
+  if (!warnings.empty()) {
+    spdlog::warn("{} warning(s) for {}{}", warnings.size(), cache.string(),
+                 strict ? "; --strict: exit 1 (the cache and outputs are complete)" : "");
+  }
   // Outputs that read the cache: field volumes (outputs.field), frames written by this bake.
   if (s.field) {
     FieldRequest req;
@@ -238,7 +255,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
     const int rc = export_preview(cache.string(), req, g);
     if (rc != kOk) return rc;
   }
-  return kOk;
+  return strict && !warnings.empty() ? kFailure : kOk;
 }
 
 }  // namespace magbake::cli

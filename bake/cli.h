@@ -41,7 +41,7 @@ int cmd_check(const std::string& path, const Global& g);
 /// "A-B" or "A" -> a, b.
 bool parse_range(const std::string& text, int& a, int& b);
 int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
-             const Global& g);
+             const Global& g, bool strict = false);
 int cmd_info_cache(const std::string& path, bool all_bodies = false);
 int cmd_info(const std::string& path, const Global& g);
 int cmd_eval(const std::string& path, double time, bool json, const Global& g);

@@ -67,6 +67,8 @@ int main(int argc, char** argv) {
   bake->add_option("-o,--output", out_dir, "output folder (the cache keeps its file name from outputs.cache)");
   bake->add_option("--frames", frames, "frame range A-B to write (simulation starts at the scene's first frame)");
   bake->add_flag("--resume", resume, "continue an interrupted bake from its last complete frame");
+  bool strict = false;
+  bake->add_flag("--strict", strict, "exit 1 when the bake ends with warnings (overlaps, energy growth, bodies lost)");
 
   std::string cache_a, cache_b;
   io::DiffOptions diff_options;
@@ -185,7 +187,7 @@ int main(int argc, char** argv) {
     cli::install_interrupt_handlers();
     return cli::export_preview(preview_cache, preview_req, g);
   }
-  if (*bake) return cli::cmd_bake(scene_path, out_dir, frames, resume, g);
+  if (*bake) return cli::cmd_bake(scene_path, out_dir, frames, resume, g, strict);
   if (*diff) return cli::cmd_diff(cache_a, cache_b, diff_options, g);
   if (*check) return cli::cmd_check(scene_path, g);
   if (*info) return cli::cmd_info(scene_path, g);

@@ -122,6 +122,14 @@ int cmd_eval(const std::string& path, double time, bool json, const Global&) {
     return kUsage;
   }
   const auto& r = e.result;
+  // Non-finite results (an overflowing scene, a solver fault) are an error, never output.
+  for (std::size_t b = 0; b < s->bodies.size(); ++b) {
+    if (!r.force[b].allFinite() || !r.torque[b].allFinite() || !r.moment[b].allFinite()) {
+      std::cerr << path << ": magnetics gave a non-finite force, torque or moment on body '" << s->bodies[b].name
+                << "' at t = " << time << " s; nothing printed\n";
+      return kFailure;
+    }
+  }
   if (!r.induction.converged) {
     spdlog::warn("induction solve stopped at residual {:.2e} after {} iterations", r.induction.residual,
                  r.induction.iterations);
@@ -204,7 +212,21 @@ int cmd_probe(const std::string& path, const std::vector<std::string>& at, const
     std::cerr << path << ": " << ex.what() << "\n";
     return kUsage;
   }
+  for (std::size_t b = 0; b < s->bodies.size(); ++b) {
+    if (!e.result.moment[b].allFinite()) {
+      std::cerr << path << ": the magnetic moment of body '" << s->bodies[b].name << "' is not finite at t = " << time
+                << " s; nothing printed\n";
+      return kFailure;
+    }
+  }
   const std::vector<Eigen::Vector3d> B = magnetics::field_at_points(e.model, e.settings, e.state, pts);
+  for (std::size_t q = 0; q < pts.size(); ++q) {
+    if (!B[q].allFinite()) {
+      std::cerr << path << ": the field at (" << pts[q][0] << ", " << pts[q][1] << ", " << pts[q][2]
+                << ") m is not finite; nothing printed\n";
+      return kFailure;
+    }
+  }
   if (json) {
     nlohmann::json out;
     out["time"] = time;

@@ -27,7 +27,8 @@ constexpr Series kObservables[] = {{"kinetic_energy", 1, "kg m2 s-2"},      {"gr
                                    {"angular_momentum", 3, "kg m2 s-1"},    {"magnetics_seconds", 1, "s"},
                                    {"rigid_seconds", 1, "s"},               {"cells_visited", 1, ""},
                                    {"induction_iterations", 1, ""},         {"induction_residual", 1, ""},
-                                   {"substeps", 1, ""}};
+                                   {"substeps", 1, ""},                     {"energy_drift", 1, "kg m2 s-2"},
+                                   {"max_speed", 1, "m s-1"},               {"max_penetration", 1, "m"}};
 
 std::vector<double> flat(const std::vector<Vec3>& v) {
   std::vector<double> out;
@@ -298,7 +299,10 @@ void CacheWriter::append(int frame, double time, const sim::SimState& s, const s
                            {double(d.cells_visited)},
                            {double(d.induction_iterations)},
                            {d.induction_residual},
-                           {double(d.substeps)}};
+                           {double(d.substeps)},
+                           {d.energy_drift},
+                           {d.max_speed},
+                           {d.max_penetration}};
   for (std::size_t k = 0; k < m.observables.size(); ++k) {
     h5::write_row(m.observables[k].id(), H5T_NATIVE_DOUBLE, row, obs[k]);
   }

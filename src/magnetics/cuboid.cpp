@@ -104,10 +104,13 @@ void sort_small(double* a, int n) {
   }
 }
 
-// Index of the axis of i's frame that unit vector e is parallel to (-1 if none).
+// Index of the axis of i's frame that unit vector e is parallel to, within ~1.4 mrad (-1 if
+// none). Nearly parallel faces are split like parallel ones: the split lines are then off by
+// at most 1e-3 of the face, far better than no split, and the rule does not flip between the
+// two as resting bodies jitter by 1e-9 rad (that flip moved a snapped pair's energy by 0.2%).
 int parallel_axis(const Vec3& e) {
   for (int a = 0; a < 3; ++a) {
-    if (std::abs(e[a]) > 1.0 - 1e-12) return a;
+    if (std::abs(e[a]) > 1.0 - 1e-6) return a;
   }
   return -1;
 }
@@ -204,9 +207,12 @@ void cuboid_pair(const Cuboid& k, const Cuboid& i, int order, Vec3& force, Vec3&
       int nu = 2, nv = 2;
       bool touching = false;
       if (aligned) {
-        // Splits and clustered nodes are only needed where k's face lies in the plane of one of
-        // i's faces (contact); elsewhere the integrand is smooth over the whole face.
-        touching = std::abs(std::abs(fc[aw]) - i.half[aw]) < 1e-6 * scale;
+        // Splits and clustered nodes are needed where k's face lies in or near the plane of
+        // one of i's faces (contact, or a gap small against the cells: the integrand is nearly
+        // log-singular over i's edges there); elsewhere it is smooth over the whole face. The
+        // band is wide so that the rule does not switch inside the range where resting bodies
+        // jitter (a switch at 1e-6 cell sizes made the energy of snapped cubes jump by 0.2%).
+        touching = std::abs(std::abs(fc[aw]) - i.half[aw]) < 0.25 * scale;
         if (touching) {
           auto add_splits = [&](int axis, const Vec3& e, double h, std::array<double, 4>& sp, int& n) {
             for (int sg = -1; sg <= 1; sg += 2) {

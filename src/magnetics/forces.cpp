@@ -75,6 +75,23 @@ int near_correction(const Model& m, const Settings& st, const State& s, int ta, 
   return count;
 }
 
+// Permanent-permanent energy of two bodies, point dipoles cell by cell (clamped as in the
+// kernels): only for bodies that also hold induced cells, whose pair sum mixes both kinds.
+double permanent_pair_energy(const Model& m, const State& s, int ba, int bb) {
+  double e = 0.0;
+  const Vec3 delta = s.body_pose[ba].position - s.body_pose[bb].position;
+  for (int k = m.body_cell_begin[ba]; k < m.body_cell_begin[ba + 1]; ++k) {
+    if (m.cell_moment[k].squaredNorm() == 0.0) continue;
+    for (int i = m.body_cell_begin[bb]; i < m.body_cell_begin[bb + 1]; ++i) {
+      if (m.cell_moment[i].squaredNorm() == 0.0) continue;
+      e += dipole_pair(delta + s.cell_offset[k] - s.cell_offset[i], s.permanent.cell[k], s.permanent.cell[i],
+                       m.cell_clamp[k] + m.cell_clamp[i])
+               .energy;
+    }
+  }
+  return e;
+}
+
 }  // namespace
 
 void accumulate_forces(const Model& m, const Settings& st, const State& s, Result& res) {
@@ -168,6 +185,7 @@ void accumulate_forces(const Model& m, const Settings& st, const State& s, Resul
     }
   }
   // Apply each pair to both bodies: F_b = -F_a, tau_b = -tau_a - (R_a - R_b) x F_a.
+  const bool induced_on = m.has_induced() && st.induction != InductionMode::kOff;
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     const auto [ba, bb] = pairs[p];
     const Vec3 delta = s.body_pose[ba].position - s.body_pose[bb].position;
@@ -175,7 +193,14 @@ void accumulate_forces(const Model& m, const Settings& st, const State& s, Resul
     res.torque[ba] += sum[p].torque;
     res.force[bb] -= sum[p].force;
     res.torque[bb] -= sum[p].torque + delta.cross(sum[p].force);
-    res.energy += sum[p].energy;
+    // Energy: the pair's own when both bodies are purely permanent; pairs with induced cells
+    // get theirs from the induction solve (-1/2 m_ind.B_0), plus the permanent-permanent part
+    // of bodies that carry both kinds.
+    if (!induced_on || (!m.body_induced[ba] && !m.body_induced[bb])) {
+      res.energy += sum[p].energy;
+    } else if (m.body_permanent[ba] && m.body_permanent[bb]) {
+      res.energy += permanent_pair_energy(m, s, ba, bb);
+    }
     res.stats.near_pairs += sum[p].near_pairs;
   }
 }

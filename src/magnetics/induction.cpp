@@ -184,15 +184,21 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
   std::vector<Vec3> B(n);
   stats.field_pairs += field_at_targets(m, s, s.permanent, t, fopt, B);
   Vector b(3 * n);
+  std::vector<Vec3> B0(n);  // field of the fixed sources at each target
   for (int q = 0; q < n; ++q) {
     Vec3 Bq = B[q] + st.external_field;
     for (int e = rows.begin[q]; e < rows.begin[q + 1]; ++e) Bq += rows.tensor[e] * s.permanent.cell[rows.cell[e]];
+    B0[q] = Bq;
     b.segment<3>(3 * q) = alpha[q] * Bq;
   }
 
   auto store = [&](const Vector& x) {
     s.induced_moment.resize(m.induced_cells.size());
-    for (int q = 0; q < n; ++q) s.induced_moment[t.original[q]] = x.segment<3>(3 * q);
+    rep.energy = 0.0;
+    for (int q = 0; q < n; ++q) {
+      s.induced_moment[t.original[q]] = x.segment<3>(3 * q);
+      rep.energy -= 0.5 * x.segment<3>(3 * q).dot(B0[q]);
+    }
     s.induced_rotation = s.body_rotation;
   };
   const double bnorm = std::sqrt(dot(b, b));

@@ -52,6 +52,10 @@ struct InductionReport {
   int iterations = 0;      ///< Krylov iterations (0 when no solve ran; 1 for paper mode)
   double residual = 0.0;   ///< final relative residual |b - A x| / |b|
   bool converged = true;
+  /// Energy of the induced moments in the field B_0 of the permanent cells and the applied
+  /// field, -1/2 sum m_ind . B_0 (J): the total magnetic energy of linear induced matter,
+  /// induced-induced coupling included (physics.md §8).
+  double energy = 0.0;
 };
 
 /// Work counters of one evaluation.
@@ -68,7 +72,9 @@ struct Result {
   std::vector<Vec3> force;   ///< N, world frame
   std::vector<Vec3> torque;  ///< N·m, world frame, about the body-frame origin (centre of mass)
   std::vector<Vec3> moment;  ///< total magnetic moment (permanent + induced), world, A·m²
-  double energy = 0.0;       ///< magnetic interaction energy of body pairs + applied field, J
+  /// Magnetic energy, J: permanent-permanent pairs of different bodies, -m.B_app of permanent
+  /// moments, and InductionReport::energy for induced ones (physics.md §8).
+  double energy = 0.0;
   InductionReport induction;
   EvalStats stats;
 };

@@ -79,6 +79,7 @@ void evaluate(const Model& m, const Settings& st, State& s, Result& res) {
       s.induced_targets.update_induced_positions(m, s);
     }
     res.induction = solve_induction(m, st, s, res.stats);
+    res.energy += res.induction.energy;
     for (std::size_t q = 0; q < m.induced_cells.size(); ++q) s.total.cell[m.induced_cells[q]] += s.induced_moment[q];
   }
   s.total.aggregate(m);
@@ -93,8 +94,8 @@ void evaluate(const Model& m, const Settings& st, State& s, Result& res) {
   // 4. Body pairs.
   accumulate_forces(m, st, s, res);
 
-  // 5. Total moments and the applied field (torque only; energy -m.B for permanent moments,
-  //    -1/2 m.B for induced ones).
+  // 5. Total moments and the applied field (torque; energy -m.B for permanent moments, the
+  //    induced ones' share is in the induction energy).
   for (int b = 0; b < m.body_count; ++b) {
     const int root = m.body_root[b];
     if (root < 0) continue;
@@ -102,7 +103,7 @@ void evaluate(const Model& m, const Settings& st, State& s, Result& res) {
     if (st.external_field.squaredNorm() > 0.0) {
       const Vec3 perm = s.permanent.node[root];
       res.torque[b] += res.moment[b].cross(st.external_field);
-      res.energy -= perm.dot(st.external_field) + 0.5 * (res.moment[b] - perm).dot(st.external_field);
+      res.energy -= perm.dot(st.external_field);
     }
   }
 }

@@ -27,6 +27,24 @@ class RigidWorld {
   /// forces and torques (world frame, about the centre of mass; held constant over the step).
   void step(double t, double h, const std::vector<Vec3>& force, const std::vector<Vec3>& torque);
 
+  /// A pair of bodies (scene indices; b = -1 for none) and how deep they interpenetrate, m.
+  struct Penetration {
+    int a = -1, b = -1;
+    double depth = 0;
+  };
+  /// Largest relative speed (m/s) over `length` (m) among pairs of bodies whose swept bounding
+  /// boxes overlapped in the last step (Bullet's pair cache: bodies that may touch within a
+  /// step) and of which at least one is dynamic and magnetic; `length` is 1% of the smaller
+  /// body's smallest extent. Multiplied by a step h it says how many substeps keep such a pair
+  /// from sinking more than that length into each other at impact (0 when no pair qualifies).
+  double closing_rate() const;
+  /// Deepest penetration among the contact points of the last step's collision detection.
+  Penetration deepest_penetration() const;
+  /// Moves dynamic bodies apart along their contact normals until no pair penetrates deeper
+  /// than `tolerance` (m). Positions only: velocities are kept, so no kinetic energy is added.
+  /// Returns the pairs that overlapped by more than `tolerance` before, deepest first.
+  std::vector<Penetration> separate_overlaps(double tolerance, int max_iterations = 200);
+
   /// Bullet's version, e.g. "3.24".
   static std::string bullet_version();
 

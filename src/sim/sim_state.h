@@ -50,6 +50,14 @@ struct FrameDiagnostics {
   int induction_iterations = 0;      ///< GMRES iterations summed over substeps
   double induction_residual = 0;     ///< largest final residual over the substeps
   int substeps = 0;                  ///< physics substeps taken (more than nominal when refined)
+  /// Change of the total energy (kinetic + gravity + magnetic) since the previous frame, J.
+  /// Without moving kinematic bodies it should never be clearly positive (contact and friction
+  /// only remove energy).
+  double energy_drift = 0;
+  double max_speed = 0;              ///< largest linear speed of a dynamic body at the frame, m/s
+  int max_speed_body = -1;           ///< that body (scene index), -1 if none
+  double max_penetration = 0;        ///< deepest contact penetration over the frame's substeps, m
+  int penetration_a = -1, penetration_b = -1;  ///< the two bodies of that contact (-1 if none)
 };
 
 }  // namespace magbake::sim

@@ -38,9 +38,16 @@ void Simulator::initialize() {
     state_.angular_velocity[i] = b.motion == scene::Motion::kDynamic ? b.angular_velocity : Vec3::Zero();
   }
   world_->set_state(state_);
+  // Bodies placed inside each other: pushed apart (positions only) before time starts, and
+  // reported, instead of being blown apart by the contact solver's position correction.
+  initial_overlaps_ = world_->separate_overlaps(0.5 * kOverlapTolerance);
+  std::erase_if(initial_overlaps_, [](const RigidWorld::Penetration& p) { return p.depth <= kOverlapTolerance; });
+  world_->get_state(state_);
   frame_ = scene_.first_frame;
   FrameDiagnostics d;
   evaluate_magnetics(d);  // forces of the first frame (reported in the cache)
+  const FrameDiagnostics m = measure();
+  last_energy_ = m.kinetic_energy + m.gravity_energy + m.magnetic_energy;
 }
 
 void Simulator::restore(const SimState& s, int frame) {
@@ -53,6 +60,8 @@ void Simulator::restore(const SimState& s, int frame) {
   }
   FrameDiagnostics d;
   evaluate_magnetics(d);
+  const FrameDiagnostics m = measure();
+  last_energy_ = m.kinetic_energy + m.gravity_energy + m.magnetic_energy;
 }
 
 void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
@@ -73,6 +82,27 @@ void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
   d.induction_iterations += mag_result_.induction.iterations;
   d.induction_residual = std::max(d.induction_residual, mag_result_.induction.residual);
   d.magnetic_energy = mag_result_.energy;
+}
+
+int Simulator::substep_split(double h) const {
+  // Magnetic stiffness: h sqrt(k/m) <= 0.5 with k = 4|F|/l, l = a quarter of the body's
+  // smallest extent (at most 64 pieces).
+  int split = 1;
+  for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
+    const scene::Body& b = scene_.bodies[i];
+    if (b.motion != scene::Motion::kDynamic || b.mass <= 0) continue;
+    const double k_lin = 4.0 * state_.magnetic_force[i].norm() / stiffness_length_[i];
+    const double rate = std::sqrt(k_lin / b.mass);
+    if (rate * h > 0.5) split = std::max(split, static_cast<int>(std::ceil(rate * h / 0.5)));
+  }
+  split = std::min(split, 64);
+  // Impact: bodies that may touch within the step (Bullet's swept pair cache) and close faster
+  // than 1% of the smaller one's size per piece get shorter pieces (at most 256), so a snapping
+  // magnet does not sink into its partner: pushing a deep penetration out against the magnetic
+  // pull is where the old step gained energy (physics.md §8).
+  const double closing = world_->closing_rate() * h;
+  if (closing > 1.0) split = std::max(split, std::min(256, static_cast<int>(std::ceil(closing))));
+  return split;
 }
 
 void Simulator::inject_fault_for_tests(int frame) {
@@ -112,27 +142,30 @@ FrameDiagnostics Simulator::advance_frame() {
   const double h = span / nominal;  // substeps land exactly on frame times
   for (int k = 0; k < nominal; ++k) {
     const double t0 = t_start + k * h;
-    // Split the substep while the magnetic stiffness would make it unstable.
-    int split = 1;
-    for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
-      const scene::Body& b = scene_.bodies[i];
-      if (b.motion != scene::Motion::kDynamic || b.mass <= 0) continue;
-      const double k_lin = 4.0 * state_.magnetic_force[i].norm() / stiffness_length_[i];
-      const double rate = std::sqrt(k_lin / b.mass);
-      if (rate * h > 0.5) split = std::max(split, static_cast<int>(std::ceil(rate * h / 0.5)));
-    }
-    split = std::min(split, 64);
-    const double hs = h / split;
-    for (int s = 0; s < split; ++s) {
-      const double t = t0 + s * hs;
-      if (s > 0 || k > 0) evaluate_magnetics(d);  // the first substep reuses the frame's forces
+    // Each nominal substep is cut into equal pieces, re-decided after every piece from the
+    // current forces and speeds (so a magnet accelerating into its partner gets shorter pieces
+    // as it closes in), and always ends exactly at t0 + h.
+    double done = 0;
+    bool first = true;
+    while (h - done > 1e-12 * h) {
+      if (!first || k > 0) evaluate_magnetics(d);  // the first substep reuses the frame's forces
+      first = false;
+      // Piece length the current state needs, then equal pieces over what is left of h.
+      const double target = h / substep_split(h);
+      const double remaining = h - done;
+      const int pieces = std::max(1, static_cast<int>(std::ceil(remaining / target - 1e-9)));
+      const double hs = remaining / pieces;
+      const double t = t0 + done;
       inject_fault_for_tests(next);
       check_finite(next);
       const auto tr = Clock::now();
       world_->step(t, hs, state_.magnetic_force, state_.magnetic_torque);
       world_->get_state(state_);
+      const RigidWorld::Penetration pen = world_->deepest_penetration();
+      if (pen.depth > d.max_penetration) d.max_penetration = pen.depth, d.penetration_a = pen.a, d.penetration_b = pen.b;
       d.rigid_seconds += seconds_since(tr);
       ++d.substeps;
+      done = pieces == 1 ? h : done + hs;
       state_.time = t + hs;
     }
   }
@@ -146,6 +179,11 @@ FrameDiagnostics Simulator::advance_frame() {
   d.gravity_energy = m.gravity_energy;
   d.momentum = m.momentum;
   d.angular_momentum = m.angular_momentum;
+  d.max_speed = m.max_speed;
+  d.max_speed_body = m.max_speed_body;
+  const double energy = d.kinetic_energy + d.gravity_energy + d.magnetic_energy;
+  d.energy_drift = energy - last_energy_;
+  last_energy_ = energy;
   return d;
 }
 
@@ -162,6 +200,7 @@ FrameDiagnostics Simulator::measure() const {
     d.gravity_energy -= b.mass * scene_.gravity.dot(state_.com_position[i]);
     d.momentum += b.mass * v;
     d.angular_momentum += state_.com_position[i].cross(b.mass * v) + I * w;
+    if (v.norm() > d.max_speed) d.max_speed = v.norm(), d.max_speed_body = static_cast<int>(i);
   }
   d.magnetic_energy = mag_result_.energy;
   return d;

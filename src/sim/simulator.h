@@ -31,7 +31,9 @@ class NumericalFault : public std::runtime_error {
 /// Advances a scene frame by frame. Each substep (physics-notes, bullet-notes):
 ///  1. magnetics at the current poses -> force and torque on every body (about its COM);
 ///  2. the substep is split when the magnetic stiffness would make it unstable
-///     (h sqrt(k/m) > 0.5 with k = 4|F|/l, l = a quarter of the body's smallest extent);
+///     (h sqrt(k/m) > 0.5 with k = 4|F|/l, l = a quarter of the body's smallest extent) or when
+///     two bodies about to touch close by more than 1% of their size per piece; the split is
+///     re-decided after every piece;
 ///  3. Bullet advances one substep with kinematic bodies moved to their keyed pose at t + h;
 ///  4. NaN/Inf anywhere stops with a NumericalFault naming the body and frame.
 class Simulator {
@@ -51,11 +53,19 @@ class Simulator {
   int frame() const { return frame_; }
   /// The magnetics state of the last evaluation (induced moments, world poses).
   const magnetics::State& magnetics_state() const { return mag_state_; }
-  /// Diagnostics of the current state alone (energies, momenta), e.g. for the first frame.
+  /// Diagnostics of the current state alone (energies, momenta, fastest body), e.g. for the
+  /// first frame.
   FrameDiagnostics measure() const;
+  /// Pairs of bodies that interpenetrated in the initial state by more than
+  /// kOverlapTolerance, before initialize() separated them (deepest first).
+  const std::vector<RigidWorld::Penetration>& initial_overlaps() const { return initial_overlaps_; }
+  /// Penetration (m) above which initial overlaps are reported and separated.
+  static constexpr double kOverlapTolerance = 1e-4;
 
  private:
   void evaluate_magnetics(FrameDiagnostics& d);
+  /// Number of equal pieces a step of h seconds needs from the current state (>= 1).
+  int substep_split(double h) const;
   void check_finite(int frame) const;
   void inject_fault_for_tests(int frame);
 
@@ -68,6 +78,8 @@ class Simulator {
   SimState state_;
   int frame_ = 0;
   std::vector<double> stiffness_length_;  // per body, m
+  std::vector<RigidWorld::Penetration> initial_overlaps_;
+  double last_energy_ = 0;  // total energy at the current frame, J (for energy_drift)
 };
 
 }  // namespace magbake::sim

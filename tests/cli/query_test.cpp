@@ -224,3 +224,27 @@ TEST(EvalCommand, KinematicBodiesAreAtTheirKeyedPose) {
 
 }  // namespace
 }  // namespace magbake::testing
+
+namespace magbake::testing {
+namespace {
+
+// A remanence that overflows the moments: eval and probe exit 1 with a message, print nothing.
+TEST(Commands, NonFiniteResultsExitOneAndPrintNothing) {
+  const std::string path = temp_scene(
+      "overflow.yaml",
+      "magbake: 1\nunits: {length: mm, angle: deg}\ntime: {fps: 30, frames: [1, 2], dt: 0.001}\n"
+      "materials:\n  hot: {kind: permanent, remanence: 1e308, density: 7500}\n  steel: {kind: soft, chi: 700, density: 7850}\n"
+      "bodies:\n  - {name: a, shape: {box: [10, 10, 10]}, material: hot, magnetization: [1, 0, 0]}\n"
+      "  - {name: b, shape: {sphere: {radius: 4}}, material: steel, position: [12, 0, 0]}\n");
+  const Outcome e = magbake("eval " + path + " --json");
+  EXPECT_EQ(e.code, 1);
+  EXPECT_TRUE(e.out.empty()) << e.out;
+  EXPECT_NE(magbake("eval " + path, true).out.find("non-finite"), std::string::npos);
+  const Outcome p = magbake("probe " + path + " --at 0.02,0,0 --json");
+  EXPECT_EQ(p.code, 1);
+  EXPECT_TRUE(p.out.empty()) << p.out;
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace magbake::testing
