@@ -32,9 +32,10 @@ class RigidWorld {
     int a = -1, b = -1;
     double depth = 0;
   };
-  /// Largest relative speed (m/s) over `length` (m) among pairs of bodies whose swept bounding
-  /// boxes overlapped in the last step (Bullet's pair cache: bodies that may touch within a
-  /// step) and of which at least one is dynamic and magnetic; `length` is 1% of the smaller
+  /// Largest approach speed (m/s, along the line between the centres) over `length` (m) among
+  /// pairs of bodies whose swept bounding boxes overlapped in the last step (Bullet's pair
+  /// cache: bodies that may touch within a step) but are not yet in contact (no contact point
+  /// closer than 0.1 mm), both permanent magnets and at least one dynamic; `length` is 1% of the smaller
   /// body's smallest extent. Multiplied by a step h it says how many substeps keep such a pair
   /// from sinking more than that length into each other at impact (0 when no pair qualifies).
   double closing_rate() const;

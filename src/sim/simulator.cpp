@@ -96,7 +96,7 @@ int Simulator::substep_split(double h) const {
     if (rate * h > 0.5) split = std::max(split, static_cast<int>(std::ceil(rate * h / 0.5)));
   }
   split = std::min(split, 64);
-  // Impact: bodies that may touch within the step (Bullet's swept pair cache) and close faster
+  // Impact: magnetic bodies that may touch within the step (Bullet's swept pair cache) and close faster
   // than 1% of the smaller one's size per piece get shorter pieces (at most 256), so a snapping
   // magnet does not sink into its partner: pushing a deep penetration out against the magnetic
   // pull is where the old step gained energy (physics.md §8).
