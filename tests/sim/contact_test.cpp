@@ -8,25 +8,13 @@
 #include <string>
 #include <vector>
 
-#include "scene/load.h"
-#include "scene/scene_magnetics.h"
+#include "bake_fixture.h"
 #include "sim/health.h"
 #include "sim/simulator.h"
 
 namespace magbake::sim {
 namespace {
 
-struct Bake {
-  scene::Scene scene;
-  magnetics::Model model;
-  std::unique_ptr<Simulator> sim;
-  explicit Bake(const std::string& yaml) : scene(scene::load_scene_text(yaml, "test.yaml")) {
-    model = scene::build_magnetics_model(scene);
-    sim = std::make_unique<Simulator>(scene, model);
-    sim->initialize();
-  }
-  double energy(const FrameDiagnostics& d) const { return d.kinetic_energy + d.gravity_energy + d.magnetic_energy; }
-};
 
 // Two 1 cm N42 cubes, magnetized along the line joining them, 2 cm apart (centres), on a table
 // or floating; they snap within ~40 ms. `frames` frames at 1 kHz (or 1/dt when dt is longer).
@@ -51,10 +39,12 @@ struct SnapRun {
   Vec3 at_a, at_b;         // centres at t = 0.15 s, m
 };
 
+double total_energy(const FrameDiagnostics& d) { return d.kinetic_energy + d.gravity_energy + d.magnetic_energy; }
+
 SnapRun snap(double dt, bool table, int frames) {
   Bake r(snap_scene(dt, table, frames));
   const int a = table ? 1 : 0, b = a + 1;
-  const double e0 = r.energy(r.sim->measure());
+  const double e0 = total_energy(r.sim->measure());
   SnapRun out;
   bool met = false;
   double lowest = 0;
@@ -62,7 +52,7 @@ SnapRun snap(double dt, bool table, int frames) {
     const FrameDiagnostics d = r.sim->advance_frame();
     const SimState& s = r.sim->state();
     const double gap = (s.com_position[a] - s.com_position[b]).norm() - 0.01;
-    const double e = r.energy(d);
+    const double e = total_energy(d);
     if (!met && gap < 1e-4) met = true, lowest = e, out.binding = e0 - e;
     if (met) {
       lowest = std::min(lowest, e);

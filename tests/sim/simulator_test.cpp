@@ -3,23 +3,12 @@
 
 #include <cmath>
 
-#include "scene/load.h"
-#include "scene/scene_magnetics.h"
+#include "bake_fixture.h"
 #include "sim/simulator.h"
 
 namespace magbake::sim {
 namespace {
 
-struct Bake {
-  scene::Scene scene;
-  magnetics::Model model;
-  std::unique_ptr<Simulator> sim;
-  explicit Bake(const std::string& yaml) : scene(scene::load_scene_text(yaml, "test.yaml")) {
-    model = scene::build_magnetics_model(scene);
-    sim = std::make_unique<Simulator>(scene, model);
-    sim->initialize();
-  }
-};
 
 // Semi-implicit Euler (Bullet): v_n = v0 + g n h, z_n = z0 + v0 t + g h² n(n+1)/2.
 TEST(Simulator, FreeFallMatchesTheClosedForm) {
