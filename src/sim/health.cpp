@@ -19,7 +19,7 @@ HealthMonitor::HealthMonitor(const scene::Scene& scene, const SimState& initial)
 }
 
 void HealthMonitor::observe(int frame, const SimState& s, const FrameDiagnostics& d) {
-  const double energy = d.kinetic_energy + d.gravity_energy + d.magnetic_energy;
+  const double energy = d.total_energy();
   scale_ = std::max(scale_, std::abs(d.magnetic_energy) + d.kinetic_energy);
   if (lowest_frame_ < 0 || energy < lowest_) lowest_ = energy, lowest_frame_ = frame;
   if (energy - lowest_ > worst_rise_) worst_rise_ = energy - lowest_, rise_from_ = lowest_frame_, rise_to_ = frame;

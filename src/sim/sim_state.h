@@ -58,6 +58,9 @@ struct FrameDiagnostics {
   int max_speed_body = -1;           ///< that body (scene index), -1 if none
   double max_penetration = 0;        ///< deepest contact penetration over the frame's substeps, m
   int penetration_a = -1, penetration_b = -1;  ///< the two bodies of that contact (-1 if none)
+
+  /// Kinetic + gravity + magnetic energy, J.
+  double total_energy() const { return kinetic_energy + gravity_energy + magnetic_energy; }
 };
 
 }  // namespace magbake::sim

@@ -46,8 +46,7 @@ void Simulator::initialize() {
   frame_ = scene_.first_frame;
   FrameDiagnostics d;
   evaluate_magnetics(d);  // forces of the first frame (reported in the cache)
-  const FrameDiagnostics m = measure();
-  last_energy_ = m.kinetic_energy + m.gravity_energy + m.magnetic_energy;
+  last_energy_ = measure().total_energy();
 }
 
 void Simulator::restore(const SimState& s, int frame) {
@@ -60,8 +59,7 @@ void Simulator::restore(const SimState& s, int frame) {
   }
   FrameDiagnostics d;
   evaluate_magnetics(d);
-  const FrameDiagnostics m = measure();
-  last_energy_ = m.kinetic_energy + m.gravity_energy + m.magnetic_energy;
+  last_energy_ = measure().total_energy();
 }
 
 void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
@@ -181,7 +179,7 @@ FrameDiagnostics Simulator::advance_frame() {
   d.angular_momentum = m.angular_momentum;
   d.max_speed = m.max_speed;
   d.max_speed_body = m.max_speed_body;
-  const double energy = d.kinetic_energy + d.gravity_energy + d.magnetic_energy;
+  const double energy = d.total_energy();
   d.energy_drift = energy - last_energy_;
   last_energy_ = energy;
   return d;

@@ -39,12 +39,10 @@ struct SnapRun {
   Vec3 at_a, at_b;         // centres at t = 0.15 s, m
 };
 
-double total_energy(const FrameDiagnostics& d) { return d.kinetic_energy + d.gravity_energy + d.magnetic_energy; }
-
 SnapRun snap(double dt, bool table, int frames) {
   Bake r(snap_scene(dt, table, frames));
   const int a = table ? 1 : 0, b = a + 1;
-  const double e0 = total_energy(r.sim->measure());
+  const double e0 = r.sim->measure().total_energy();
   SnapRun out;
   bool met = false;
   double lowest = 0;
@@ -52,7 +50,7 @@ SnapRun snap(double dt, bool table, int frames) {
     const FrameDiagnostics d = r.sim->advance_frame();
     const SimState& s = r.sim->state();
     const double gap = (s.com_position[a] - s.com_position[b]).norm() - 0.01;
-    const double e = total_energy(d);
+    const double e = d.total_energy();
     if (!met && gap < 1e-4) met = true, lowest = e, out.binding = e0 - e;
     if (met) {
       lowest = std::min(lowest, e);
