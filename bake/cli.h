@@ -37,7 +37,9 @@ inline constexpr std::size_t kSummaryBodies = 24;
 /// every body even in a large scene.
 std::string scene_summary(const scene::Scene& s, bool all_bodies = false);
 
-int cmd_check(const std::string& path, const Global& g);
+/// `check`: validates, prints the summary and the expected cost of a bake (from a trial bake of
+/// `trial_seconds` of wall time at most; 0 = evaluation cost only); `json` for the stable form.
+int cmd_check(const std::string& path, double trial_seconds, bool json, const Global& g);
 /// "A-B" or "A" -> a, b.
 bool parse_range(const std::string& text, int& a, int& b);
 int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,

@@ -108,6 +108,10 @@ int main(int argc, char** argv) {
 
   auto* check = app.add_subcommand("check", "validate a scene and print a one-screen summary with its cost (exit 0/2)");
   check->add_option("scene", scene_path, "scene file (YAML)")->required();
+  double trial_seconds = 2.0;
+  check->add_option("--trial", trial_seconds,
+                    "seconds of trial bake behind the cost estimate (0 = none)")->capture_default_str()->check(CLI::Range(0.0, 1e6));
+  check->add_flag("--json", json, "JSON on stdout (SI units)");
 
   auto* info = app.add_subcommand("info", "human-readable summary of a scene or a cache");
   info->add_option("file", scene_path, "scene file (YAML) or cache (.h5)")->required();
@@ -189,7 +193,7 @@ int main(int argc, char** argv) {
   }
   if (*bake) return cli::cmd_bake(scene_path, out_dir, frames, resume, g, strict);
   if (*diff) return cli::cmd_diff(cache_a, cache_b, diff_options, g);
-  if (*check) return cli::cmd_check(scene_path, g);
+  if (*check) return cli::cmd_check(scene_path, trial_seconds, json, g);
   if (*info) return cli::cmd_info(scene_path, g);
   if (*eval) return cli::cmd_eval(scene_path, time, json, g);
   if (*probe) return cli::cmd_probe(scene_path, at, points_file, time, json, g);

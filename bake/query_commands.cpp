@@ -7,10 +7,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 #include "cli.h"
 #include "io/cache.h"
+#include "sim/cost_estimate.h"
 #include "scene/scene_magnetics.h"
 
 namespace magbake::cli {
@@ -53,29 +55,31 @@ bool parse_point(std::string text, Eigen::Vector3d& p) {
 
 }  // namespace
 
-int cmd_check(const std::string& path, const Global& g) {
+int cmd_check(const std::string& path, double trial_seconds, bool json, const Global& g) {
   auto s = load_or_report(path);
   if (!s) return kUsage;
-  std::cout << scene_summary(*s, g.verbose);
+  if (!json) std::cout << scene_summary(*s, g.verbose);
   try {
     // Cells per body and the cost of one evaluation at the first frame.
     Evaluated e = evaluate_at(*s, 0.0);
-    std::cout << "cells    ";
     int magnetic = 0, fewest = 0, most = 0;
     for (int b = 0; b < e.model.body_count; ++b) {
       const int n = e.model.body_cell_begin[b + 1] - e.model.body_cell_begin[b];
       if (n == 0) continue;
       fewest = magnetic == 0 ? n : std::min(fewest, n), most = std::max(most, n), ++magnetic;
     }
-    if (g.verbose || s->bodies.size() <= kSummaryBodies) {
-      for (int b = 0; b < e.model.body_count; ++b) {
-        const int n = e.model.body_cell_begin[b + 1] - e.model.body_cell_begin[b];
-        if (n > 0) std::cout << s->bodies[b].name << " " << n << "  ";
+    if (!json) {
+      std::cout << "cells    ";
+      if (g.verbose || s->bodies.size() <= kSummaryBodies) {
+        for (int b = 0; b < e.model.body_count; ++b) {
+          const int n = e.model.body_cell_begin[b + 1] - e.model.body_cell_begin[b];
+          if (n > 0) std::cout << s->bodies[b].name << " " << n << "  ";
+        }
+        std::cout << "(total " << e.model.cell_count() << ")\n";
+      } else {
+        std::cout << e.model.cell_count() << " in " << magnetic << " magnetic bodies (" << fewest << " to " << most
+                  << " per body)\n";
       }
-      std::cout << "(total " << e.model.cell_count() << ")\n";
-    } else {
-      std::cout << e.model.cell_count() << " in " << magnetic << " magnetic bodies (" << fewest << " to " << most
-                << " per body)\n";
     }
     // Repeat a few evaluations (warm) for a steadier figure.
     const auto t0 = std::chrono::steady_clock::now();
@@ -85,12 +89,43 @@ int cmd_check(const std::string& path, const Global& g) {
       ++reps;
     } while (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 0.2 && reps < 50);
     const double per = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / reps;
-    const double duration = (s->last_frame - s->first_frame) / s->fps;
-    const double substeps = std::ceil(duration / s->dt - 1e-9);
+    // The expected cost of the bake: a trial bake of the shot's first steps (substep splitting,
+    // induction iterations and contact as the bake will see them), scaled to the whole shot.
+    const sim::CostEstimate est =
+        sim::estimate_cost(*s, e.model, trial_seconds, trial_seconds > 0 ? std::numeric_limits<int>::max() : 0);
+    if (json) {
+      nlohmann::json out;
+      out["scene"] = path;
+      out["name"] = s->name;
+      out["cells"] = e.model.cell_count();
+      out["evaluation_seconds"] = per;
+      out["estimate"] = {{"nominal_steps", est.nominal_steps},
+                         {"trial_steps", est.trial_steps},
+                         {"trial_seconds", est.trial_seconds},
+                         {"substeps", est.substeps},
+                         {"evaluations", est.evaluations},
+                         {"induction_iterations", est.induction_iterations},
+                         {"cells_visited", est.cells_visited},
+                         {"magnetics_seconds", est.magnetics_seconds},
+                         {"rigid_seconds", est.rigid_seconds},
+                         {"seconds", est.seconds()}};
+      std::cout << out.dump(2) << "\n";
+      return kOk;
+    }
     std::printf("cost     %.3g ms per magnetics evaluation at t = 0 (%lld cell pairs, %lld node pairs, "
-                "induction %d iterations) -> about %.3g s of magnetics for %.0f substeps\n",
+                "induction %d iterations)\n",
                 per * 1e3, (long long)e.result.stats.cell_pairs, (long long)e.result.stats.node_pairs,
-                e.result.induction.iterations, per * substeps, substeps);
+                e.result.induction.iterations);
+    if (est.trial_steps > 0) {
+      std::printf("expect   %.0f substeps for %lld steps of dt (x%.2f), %.3g induction iterations per evaluation "
+                  "-> about %.3g s: magnetics %.3g s, rigid bodies %.3g s (trial of the first %d steps, %.2g s)\n",
+                  est.substeps, est.nominal_steps, est.substeps / std::max<double>(1, est.nominal_steps),
+                  est.evaluations > 0 ? est.induction_iterations / est.evaluations : 0.0, est.seconds(),
+                  est.magnetics_seconds, est.rigid_seconds, est.trial_steps, est.trial_seconds);
+    } else {
+      std::printf("expect   at least %.3g s of magnetics for %lld steps of dt (no trial: substeps not counted)\n",
+                  per * est.nominal_steps, est.nominal_steps);
+    }
   } catch (const std::exception& ex) {
     std::cerr << path << ": " << ex.what() << "\n";
     return kUsage;

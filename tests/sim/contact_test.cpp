@@ -36,7 +36,7 @@ struct SnapRun {
   double worst_rise = 0;   // largest rise of the total energy above its lowest value after contact, J
   double final_gap = 0;    // centre distance at the end minus 10 mm, m
   Vec3 final_a, final_b;   // centres at the end, m
-  Vec3 at_a, at_b;         // centres at t = 0.15 s, m
+  Vec3 at_a, at_b;         // centres at t = 0.3 s, m
 };
 
 SnapRun snap(double dt, bool table, int frames) {
@@ -57,7 +57,7 @@ SnapRun snap(double dt, bool table, int frames) {
       out.worst_rise = std::max(out.worst_rise, e - lowest);
     }
     out.final_gap = gap;
-    if (std::abs(s.time - 0.15) < 1e-9) out.at_a = s.com_position[a], out.at_b = s.com_position[b];
+    if (std::abs(s.time - 0.3) < 1e-9) out.at_a = s.com_position[a], out.at_b = s.com_position[b];
   }
   out.final_a = r.sim->state().com_position[a];
   out.final_b = r.sim->state().com_position[b];
@@ -65,19 +65,19 @@ SnapRun snap(double dt, bool table, int frames) {
   return out;
 }
 
-// The bound the docs claim (physics.md §8): after contact the total energy never rises above its
-// lowest value by more than this fraction of the binding energy, at every dt from 0.1 to 5 ms.
-// The issue's target is 2%; measured today 0.15-2.8% across the six cases (the snapped pair's
-// remaining hops are chaotic, so the worst case moves with any change), hence 5%.
-constexpr double kSnapEnergyBound = 0.05;
-constexpr double kConvergenceBound = 2e-3;  // m (measured 1.3 mm; the target is 0.5 mm over 0.3 s)
+// The bounds the docs claim (physics.md §8), issue 11's targets: after contact the total energy
+// never rises above its lowest value by more than 2% of the binding energy, at every dt from 0.1
+// to 5 ms (measured 0.00-0.55% across the six cases), and positions after 0.3 s converge in dt
+// to within 0.5 mm of the dt 0.1 ms run for dt <= 1 ms (measured 0.001 mm at 0.15 s).
+constexpr double kSnapEnergyBound = 0.02;
+constexpr double kConvergenceBound = 5e-4;  // m
 
 TEST(Contact, SnappedCubesStayTogetherAndGainNoEnergy) {
   std::vector<SnapRun> finals;  // on the table, dt 0.1, 1, 5 ms
   for (bool table : {true, false}) {
     for (double dt : {1e-4, 1e-3, 5e-3}) {
-      // 0.3 s of shot (0.15 s at dt 0.1 ms, to keep the suite short).
-      const double span = dt < 5e-4 ? 0.15 : 0.3;
+      // 0.3 s of shot (0.15 s at dt 0.1 ms in zero gravity, to keep the suite short).
+      const double span = dt < 5e-4 && !table ? 0.15 : 0.3;
       const SnapRun run = snap(dt, table, static_cast<int>(std::lround(span / std::max(dt, 1e-3))));
       std::printf("%s dt %.1f ms: binding %.4f J, largest energy rise after contact %.2e J (%.2f%%), gap %.3f mm\n",
                   table ? "table" : "space", 1e3 * dt, run.binding, run.worst_rise,
@@ -88,13 +88,12 @@ TEST(Contact, SnappedCubesStayTogetherAndGainNoEnergy) {
       if (table) finals.push_back(run);
     }
   }
-  // Convergence in dt on the table: centres at t = 0.15 s against the dt 0.1 ms run, for dt 0.5
-  // and 1 ms. The issue asks for 0.5 mm over 0.3 s; what holds today (the snapped pair still
-  // hops and creeps by fractions of a millimetre, physics.md §8) is kConvergenceBound at 0.15 s.
-  const SnapRun half = snap(5e-4, true, 150);
+  // Convergence in dt on the table: centres at t = 0.3 s against the dt 0.1 ms run, for dt 0.5
+  // and 1 ms.
+  const SnapRun half = snap(5e-4, true, 300);
   for (const SnapRun* r : std::vector<const SnapRun*>{&finals[1], &half}) {
     const double da = (r->at_a - finals[0].at_a).norm(), db = (r->at_b - finals[0].at_b).norm();
-    std::printf("positions at 0.15 s against dt 0.1 ms: %.3f mm, %.3f mm\n", 1e3 * da, 1e3 * db);
+    std::printf("positions at 0.3 s against dt 0.1 ms: %.3f mm, %.3f mm\n", 1e3 * da, 1e3 * db);
     EXPECT_LT(std::max(da, db), kConvergenceBound);
   }
 }
@@ -118,6 +117,37 @@ TEST(Contact, OverlappingStartIsSeparatedWithoutAKick) {
   EXPECT_LT(std::abs((s.com_position[0] - s.com_position[1]).norm() - 0.01), 5e-4);
   EXPECT_LT(s.velocity[0].norm(), 0.05);
   EXPECT_LT(s.velocity[1].norm(), 0.05);
+}
+
+// Two touching 1 cm N42 cubes (pulled together with 55 N) spinning at 10 rad/s as one rigid
+// dumbbell in zero gravity, friction 0.5: nothing slips, so the pair must keep its angular
+// momentum (issue 11: under 5% per second; before the contact fixes of physics.md §8 it lost
+// all of it within 0.1 s) and each cube must keep turning with the pair.
+TEST(Contact, SpinningSnappedDumbbellKeepsItsAngularMomentum) {
+  Bake r("magbake: 1\nunits: {length: mm, angle: deg}\ntime: {fps: 100, frames: [1, 26], dt: 0.001}\n"
+         "gravity: [0, 0, 0]\nmaterials: {N42: {kind: permanent, remanence: 1.3, density: 7500}}\n"
+         "bodies:\n"
+         "  - {name: a, shape: {box: [10, 10, 10]}, material: N42, magnetization: [1, 0, 0], position: [-5, 0, 0],"
+         " friction: 0.5, velocity: [0, -50, 0], angular_velocity: [0, 0, 572.9578]}\n"
+         "  - {name: b, shape: {box: [10, 10, 10]}, material: N42, magnetization: [1, 0, 0], position: [5, 0, 0],"
+         " friction: 0.5, velocity: [0, 50, 0], angular_velocity: [0, 0, 572.9578]}\n");
+  const Vec3 l0 = r.sim->measure().angular_momentum;
+  ASSERT_NEAR(l0.z(), 6.25e-6, 1e-8);  // 2 (m r v + I w) = 2 (7.5e-3 0.005 0.05 + 1.25e-7 10)
+  double worst_spin = 0, worst_gap = 0;
+  for (int f = 0; f < 25; ++f) {
+    r.sim->advance_frame();
+    const SimState& s = r.sim->state();
+    for (int b = 0; b < 2; ++b) worst_spin = std::max(worst_spin, std::abs(s.angular_velocity[b].z() - 10.0));
+    worst_gap = std::max(worst_gap, std::abs((s.com_position[0] - s.com_position[1]).norm() - 0.01));
+  }
+  const Vec3 l1 = r.sim->measure().angular_momentum;
+  const double loss = 1.0 - l1.norm() / l0.norm();
+  std::printf("dumbbell: angular momentum %.6e -> %.6e kg m^2/s in 0.25 s (%.3f%% per second), spins off the "
+              "pair's by up to %.3f rad/s, centres off 10 mm by up to %.2e mm\n",
+              l0.norm(), l1.norm(), 100 * loss / 0.25, worst_spin, 1e3 * worst_gap);
+  EXPECT_LT(std::abs(loss), 0.05 * 0.25);    // under 5% per second
+  EXPECT_LT(worst_spin, 0.1);                 // each cube turns with the pair (1% of 10 rad/s)
+  EXPECT_LT(worst_gap, 5e-5);                 // and they stay snapped
 }
 
 // The health summary names an energy rise without a source and a body that left the region.

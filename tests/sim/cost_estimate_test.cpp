@@ -1,0 +1,82 @@
+// `magbake check`'s cost estimate (sim::estimate_cost) against what baking the scene then does:
+// substeps, induction iterations and cell pairs within 2x (issue 11). Counts, not seconds, so
+// the test does not depend on the machine's load.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "scene/load.h"
+#include "scene/scene_magnetics.h"
+#include "sim/cost_estimate.h"
+#include "sim/simulator.h"
+
+namespace magbake::sim {
+namespace {
+
+struct Spent {
+  double substeps = 0, induction_iterations = 0, cells_visited = 0;
+};
+
+Spent bake(const scene::Scene& s, const magnetics::Model& model) {
+  Simulator sim(s, model);
+  sim.initialize();
+  Spent out;
+  while (sim.frame() < s.last_frame) {
+    const FrameDiagnostics d = sim.advance_frame();
+    out.substeps += d.substeps;
+    out.induction_iterations += d.induction_iterations;
+    out.cells_visited += static_cast<double>(d.cells_visited);
+  }
+  return out;
+}
+
+// Ratio of estimate to actual, both > 0 (or both 0, which counts as exact).
+double ratio(double est, double actual) { return est == actual ? 1.0 : est / actual; }
+
+void expect_within_2x(const std::string& label, scene::Scene s) {
+  const magnetics::Model model = scene::build_magnetics_model(s);
+  const long long steps = (s.last_frame - s.first_frame) * std::llround(std::ceil(1.0 / (s.fps * s.dt) - 1e-9));
+  // The trial sees the first 10% of the shot, as `check` sees the first seconds of a long one.
+  const CostEstimate e = estimate_cost(s, model, 1e9, static_cast<int>(std::max(1LL, steps / 10)));
+  const Spent a = bake(s, model);
+  const double rs = ratio(e.substeps, a.substeps), ri = ratio(e.induction_iterations, a.induction_iterations),
+               rc = ratio(e.cells_visited, a.cells_visited);
+  std::printf("%-14s %lld steps, trial %d: substeps %.0f / %.0f (%.2f), induction iterations %.0f / %.0f (%.2f), "
+              "cell pairs %.3g / %.3g (%.2f)\n",
+              label.c_str(), e.nominal_steps, e.trial_steps, e.substeps, a.substeps, rs, e.induction_iterations,
+              a.induction_iterations, ri, e.cells_visited, a.cells_visited, rc);
+  EXPECT_EQ(e.nominal_steps, steps) << label;
+  for (double r : {rs, ri, rc}) {
+    EXPECT_GT(r, 0.5) << label;
+    EXPECT_LT(r, 2.0) << label;
+  }
+}
+
+scene::Scene shortened(const std::string& file, int frames) {
+  scene::Scene s = scene::load_scene((std::filesystem::path(MAGBAKE_SOURCE_DIR) / file).string());
+  s.last_frame = s.first_frame + frames;
+  return s;
+}
+
+TEST(CostEstimate, CheckPredictsWhatTheBakeSpends) {
+  // Two cubes snapping on a table (contact after ~40 ms), 0.1 s.
+  expect_within_2x("snap", scene::load_scene_text(
+      "magbake: 1\nunits: {length: mm, angle: deg}\ntime: {fps: 100, frames: [1, 11], dt: 0.001}\n"
+      "gravity: [0, 0, -9810]\n"
+      "materials: {N42: {kind: permanent, remanence: 1.3, density: 7500}, wood: {kind: none, density: 700}}\n"
+      "bodies:\n"
+      "  - {name: table, shape: {box: [200, 200, 10]}, material: wood, motion: static, position: [0, 0, -5]}\n"
+      "  - {name: a, shape: {box: [10, 10, 10]}, material: N42, magnetization: [1, 0, 0], position: [-10, 0, 5]}\n"
+      "  - {name: b, shape: {box: [10, 10, 10]}, material: N42, magnetization: [1, 0, 0], position: [10, 0, 5]}\n",
+      "snap.yaml"));
+  expect_within_2x("demo", shortened("scenes/demo.yaml", 3));            // steel sphere and magnet
+  expect_within_2x("tst", shortened("scenes/paper/tst.yaml", 2));        // the paper's Fig. 2
+  expect_within_2x("bowl_spheres", shortened("scenes/paper/bowl_spheres.yaml", 1));  // Fig. 7
+}
+
+}  // namespace
+}  // namespace magbake::sim
