@@ -43,7 +43,8 @@ std::string scene_summary(const scene::Scene& s, bool all_bodies) {
   const int frames = s.last_frame - s.first_frame + 1;
   const double duration = (s.last_frame - s.first_frame) / s.fps;
   std::snprintf(buf, sizeof buf, "time     %g fps, frames %d-%d (%d frames, %.3g s), substep %.4g ms (%.0f substeps)\n",
-                s.fps, s.first_frame, s.last_frame, frames, duration, s.dt * 1e3, std::ceil(duration / s.dt - 1e-9));
+                s.fps, s.first_frame, s.last_frame, frames, duration, s.dt * 1e3,
+                static_cast<double>(s.steps_per_frame()) * (frames - 1));
   os << buf;
   std::snprintf(buf, sizeof buf, "gravity  %g %g %g m/s²\n", s.gravity[0], s.gravity[1], s.gravity[2]);
   os << buf;

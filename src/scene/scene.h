@@ -2,6 +2,8 @@
 // load_scene(); everything that changes during a bake lives elsewhere (sim::SimState).
 #pragma once
 
+#include <cmath>
+
 #include <memory>
 #include <optional>
 #include <string>
@@ -136,6 +138,12 @@ struct Scene {
 
   /// Time (s) of a frame: (f - first) / fps.
   double frame_time(int f) const { return (f - first_frame) / fps; }
+  /// Nominal physics steps between two frames: dt rounded down so that whole steps land on the
+  /// frame times, ceil((1/fps) / dt), at least 1. Each step is (1/fps) / this long.
+  int steps_per_frame() const {
+    const double n = std::ceil(1.0 / (fps * dt) - 1e-9);
+    return n < 1 ? 1 : static_cast<int>(n);
+  }
   int body_index(const std::string& name) const;
 };
 

@@ -13,7 +13,7 @@ CostEstimate estimate_cost(const scene::Scene& scene, const magnetics::Model& mo
   CostEstimate e;
   const int frames = scene.last_frame - scene.first_frame;
   const double span = 1.0 / scene.fps;
-  const long long per_frame = std::max(1LL, static_cast<long long>(std::ceil(span / scene.dt - 1e-9)));
+  const long long per_frame = scene.steps_per_frame();
   e.nominal_steps = per_frame * frames;
   if (e.nominal_steps == 0 || max_steps <= 0) return e;
 

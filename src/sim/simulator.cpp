@@ -138,7 +138,7 @@ FrameDiagnostics Simulator::advance_frame() {
   const int next = frame_ + 1;
   const double t_start = scene_.frame_time(frame_), t_end = scene_.frame_time(next);
   const double span = t_end - t_start;
-  const int nominal = std::max(1, static_cast<int>(std::ceil(span / scene_.dt - 1e-9)));
+  const int nominal = scene_.steps_per_frame();
   const double h = span / nominal;  // substeps land exactly on frame times
   for (int k = 0; k < nominal; ++k) {
     const double t0 = t_start + k * h;

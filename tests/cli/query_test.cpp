@@ -185,6 +185,27 @@ TEST(Commands, CheckAndInfoSummarizeTheDemo) {
   EXPECT_EQ(magbake("nonsense").code, 2);         // unknown command
 }
 
+// check --json: the expected cost of the demo bake from a trial bake (here all of its 5963 steps
+// of dt fit in the trial: 89 frame intervals x ceil((1/30 s) / 0.5 ms) = 67), and --trial 0.
+TEST(Commands, CheckJsonEstimatesTheBake) {
+  const Outcome c = magbake("check " + scene("demo.yaml") + " --json --trial 60");
+  ASSERT_EQ(c.code, 0) << c.out;
+  const auto j = nlohmann::json::parse(c.out);
+  EXPECT_EQ(j["name"], "toy_magnet_and_sphere");
+  EXPECT_EQ(j["cells"], 320);
+  const auto& e = j["estimate"];
+  EXPECT_EQ(e["nominal_steps"], 5963);
+  EXPECT_EQ(e["trial_steps"], 5963);  // the whole shot: counts are then the bake's own
+  EXPECT_GE(e["substeps"].get<double>(), 5963);
+  EXPECT_DOUBLE_EQ(e["evaluations"].get<double>(), e["substeps"].get<double>());
+  EXPECT_GT(e["induction_iterations"].get<double>(), 0);
+  EXPECT_GT(e["seconds"].get<double>(), 0);
+  const Outcome none = magbake("check " + scene("demo.yaml") + " --json --trial 0");
+  ASSERT_EQ(none.code, 0);
+  EXPECT_EQ(nlohmann::json::parse(none.out)["estimate"]["trial_steps"], 0);
+  EXPECT_EQ(magbake("check " + scene("demo.yaml") + " --trial -1").code, 2);
+}
+
 TEST(Commands, CheckOfALargeSceneFitsOnOneScreen) {
   // 60 magnets of one shape: the summary lists the first bodies and counts the rest; --verbose
   // lists all.

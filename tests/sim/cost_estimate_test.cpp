@@ -39,7 +39,7 @@ double ratio(double est, double actual) { return est == actual ? 1.0 : est / act
 
 void expect_within_2x(const std::string& label, scene::Scene s) {
   const magnetics::Model model = scene::build_magnetics_model(s);
-  const long long steps = (s.last_frame - s.first_frame) * std::llround(std::ceil(1.0 / (s.fps * s.dt) - 1e-9));
+  const long long steps = static_cast<long long>(s.last_frame - s.first_frame) * s.steps_per_frame();
   // The trial sees the first 10% of the shot, as `check` sees the first seconds of a long one.
   const CostEstimate e = estimate_cost(s, model, 1e9, static_cast<int>(std::max(1LL, steps / 10)));
   const Spent a = bake(s, model);
