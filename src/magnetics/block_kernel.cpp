@@ -24,14 +24,16 @@ void block_scalar(const State& s, int tb, int te, int sb, int se, const Vec3& de
     const V xk = pk + d;
     const V mk = s.total.cell[k].cast<Real>();
     V F = V::Zero(), T = V::Zero();
-    Real U = 0;
+    Real U = 0, W = 0;  // W: the clamp's energy continuation, sum of F.(r_c - r) (units of F)
     for (int i = sb; i < se; ++i) {
       V r = xk - s.cell_offset[i].cast<Real>();
       const V mi = s.total.cell[i].cast<Real>();
       Real d2 = r.squaredNorm();
+      Real stretch = 0;  // 1 - |r| / |r_c| when clamped
       if (clamp) {
         const Real dmin = Real(s.fclamp[k]) + Real(s.fclamp[i]);
         if (d2 < dmin * dmin) {
+          stretch = Real(1) - std::sqrt(d2) / dmin;
           r *= dmin / std::sqrt(d2 > 0 ? d2 : Real(1e-300));
           if (!(d2 > 0)) r = V(0, 0, dmin);
           d2 = dmin * dmin;
@@ -42,7 +44,9 @@ void block_scalar(const State& s, int tb, int te, int sb, int se, const Vec3& de
       const Real inv5 = inv2 * inv2 * inv;
       const Real a = mk.dot(r), b = mi.dot(r), c = mk.dot(mi);
       const Real sc = c - Real(5) * a * b * inv2;
-      F += inv5 * (a * mi + b * mk + sc * r);
+      const V Fp = inv5 * (a * mi + b * mk + sc * r);
+      F += Fp;
+      if (stretch > 0) W += stretch * Fp.dot(r);
       const V B = Real(3) * b * r - d2 * mi;
       T += inv5 * mk.cross(B);
       U += inv5 * mk.dot(B);
@@ -50,7 +54,7 @@ void block_scalar(const State& s, int tb, int te, int sb, int se, const Vec3& de
     // Lever arm about the body origin: p_k x F_k (F in units of 3 mu0/4pi, T of mu0/4pi).
     const V G = Real(3) * pk.cross(F) + T;
     for (int a = 0; a < 3; ++a) f_sum[a] += F[a], g_sum[a] += G[a];
-    u_sum += U;
+    u_sum += U - Real(3) * W;  // energy -K u: the continuation +3K W enters as -3 W
   }
   out.force = 3.0 * kMu0Over4Pi * Vec3(f_sum[0], f_sum[1], f_sum[2]);
   out.torque = kMu0Over4Pi * Vec3(g_sum[0], g_sum[1], g_sum[2]);
@@ -104,7 +108,7 @@ void block_avx2(const State& s, int tb, int te, int sb, int se, const Vec3& delt
       // follow after the loop, since mk is the same for every source.
       // The b5 mk term of F shares mk across sources: its scalar factor is summed (SB) and
       // multiplied by mk once after the loop.
-      __m256 FX = _mm256_setzero_ps(), FY = FX, FZ = FX, BX = FX, BY = FX, BZ = FX, SB = FX;
+      __m256 FX = _mm256_setzero_ps(), FY = FX, FZ = FX, BX = FX, BY = FX, BZ = FX, SB = FX, WW = FX;
       for (int i = sb; i < se; ++i) {
         __m256 rx = _mm256_sub_ps(X, _mm256_set1_ps(s.fx[i]));
         __m256 ry = _mm256_sub_ps(Y, _mm256_set1_ps(s.fy[i]));
@@ -112,6 +116,7 @@ void block_avx2(const State& s, int tb, int te, int sb, int se, const Vec3& delt
         const __m256 bmx = _mm256_set1_ps(s.fmx[i]), bmy = _mm256_set1_ps(s.fmy[i]), bmz = _mm256_set1_ps(s.fmz[i]);
         __m256 d2 = _mm256_fmadd_ps(rz, rz, _mm256_fmadd_ps(ry, ry, _mm256_mul_ps(rx, rx)));
         __m256 z = rsqrt2_nr(d2);  // 2/d
+        [[maybe_unused]] __m256 stretch = _mm256_setzero_ps();
         if constexpr (kClamp) {
           // Keep the direction, lengthen r to at least the contact distance of the two cells.
           const __m256 dmin = _mm256_add_ps(CL, _mm256_set1_ps(s.fclamp[i]));
@@ -119,6 +124,7 @@ void block_avx2(const State& s, int tb, int te, int sb, int se, const Vec3& delt
           rx = _mm256_mul_ps(rx, sc), ry = _mm256_mul_ps(ry, sc), rz = _mm256_mul_ps(rz, sc);
           d2 = _mm256_mul_ps(d2, _mm256_mul_ps(sc, sc));
           z = rsqrt2_nr(d2);
+          stretch = _mm256_sub_ps(_mm256_set1_ps(1.0f), _mm256_div_ps(_mm256_set1_ps(1.0f), sc));  // 1 - |r|/|r_c|
         }
         // In units of 1/d = z/2: inv2 = z²/4, inv5 = z⁵/32 (the 1/4, 1/32 go into the constants).
         const __m256 z2 = _mm256_mul_ps(z, z);
@@ -141,6 +147,12 @@ void block_avx2(const State& s, int tb, int te, int sb, int se, const Vec3& delt
         FY = _mm256_fmadd_ps(s5, ry, _mm256_fmadd_ps(a5, bmy, FY));
         FZ = _mm256_fmadd_ps(s5, rz, _mm256_fmadd_ps(a5, bmz, FZ));
         SB = _mm256_add_ps(SB, b5);
+        if constexpr (kClamp) {
+          // Energy continuation F_pair . (r_c - r) = stretch (F_pair . r_c), F_pair . r_c =
+          // a5 b + b5 a + s5 d² (same units as F).
+          const __m256 fr = _mm256_fmadd_ps(s5, d2, _mm256_fmadd_ps(a5, b, _mm256_mul_ps(b5, a)));
+          WW = _mm256_fmadd_ps(stretch, fr, WW);
+        }
       }
       FX = _mm256_fmadd_ps(SB, MX, FX), FY = _mm256_fmadd_ps(SB, MY, FY), FZ = _mm256_fmadd_ps(SB, MZ, FZ);
       const __m256 four = _mm256_set1_ps(4.0f);
@@ -157,6 +169,7 @@ void block_avx2(const State& s, int tb, int te, int sb, int se, const Vec3& delt
       f[0] += hsum(FX), f[1] += hsum(FY), f[2] += hsum(FZ);
       g[0] += hsum(GX), g[1] += hsum(GY), g[2] += hsum(GZ);
       u += hsum(UU);
+      if constexpr (kClamp) u -= 3.0 * hsum(WW);  // energy -K u / 32: the continuation enters as -3 W
     }
   }
   constexpr double k32 = 1.0 / 32.0;  // z⁵ = 32 / d⁵

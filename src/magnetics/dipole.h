@@ -42,11 +42,15 @@ struct DipolePair {
 };
 
 /// Evaluates the pair with the distance clamped to at least d_min (m, physics-notes §6);
-/// the direction of r is kept.
+/// the direction of r is kept. Inside the clamp the force and torque are those at the clamped
+/// separation r_c and the energy is continued linearly along r, U(r_c) + F·(r_c - r), so that
+/// the radial force stays the energy's gradient (physics.md §8).
 inline DipolePair dipole_pair(const Vec3& r_in, const Vec3& m_k, const Vec3& m_i, double d_min = 0.0) {
   Vec3 r = r_in;
   double d2 = r.squaredNorm();
+  double shift = 0.0;  // |r_c| - |r|, m
   if (d2 < d_min * d_min) {
+    shift = d_min - std::sqrt(d2);
     r *= d_min / std::sqrt(d2);
     d2 = d_min * d_min;
   }
@@ -60,6 +64,7 @@ inline DipolePair dipole_pair(const Vec3& r_in, const Vec3& m_k, const Vec3& m_i
   const Vec3 B = (kMu0Over4Pi * inv5) * (3.0 * b * r - d2 * m_i);
   p.torque = m_k.cross(B);
   p.energy = -m_k.dot(B);
+  if (shift > 0.0) p.energy += p.force.dot(r) * inv * shift;  // F . (r_c - r)
   return p;
 }
 
