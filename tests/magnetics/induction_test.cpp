@@ -146,21 +146,24 @@ TEST(Induction, SignOfTheForceFollowsTheSusceptibility) {
 }
 
 // The reported energy of induced matter (-1/2 m_ind.B_0) is the potential of the force: for a
-// steel sphere at a magnet and for two steel spheres in a field (induced-induced coupling), the
-// force equals -dE/dx by central differences, away from contact (no near field in play).
+// steel sphere and a superconducting one (chi = -1) at a magnet and for two steel spheres in a
+// field (induced-induced coupling), the force equals -dE/dx by central differences, away from
+// contact (no near field in play).
 TEST(Induction, ReportedEnergyIsThePotentialOfTheForce) {
   struct Case {
     bool magnet;
     Vec3 at;
+    double chi;  // of the moving sphere
   };
-  for (const Case& c : {Case{true, Vec3(0.001, 0.0005, 0.016)}, Case{false, Vec3(0.002, 0, 0.0135)}}) {
+  for (const Case& c : {Case{true, Vec3(0.001, 0.0005, 0.016), 700}, Case{false, Vec3(0.002, 0, 0.0135), 700},
+                        Case{true, Vec3(0.001, 0.0005, 0.016), -1}}) {  // and a superconductor
     Rig s;
     if (c.magnet) {
       s.add(std::make_unique<geometry::CylinderShape>(0.005, 0.01), permanent(1.3));
     } else {
       s.add(std::make_unique<geometry::SphereShape>(0.005), linear(700));
     }
-    s.add(std::make_unique<geometry::SphereShape>(0.004), linear(700));
+    s.add(std::make_unique<geometry::SphereShape>(0.004), linear(c.chi));
     s.build(0.001);
     Settings st;
     st.theta = 0;  // exact pair sums: the tree's switches would show up in a finite difference
@@ -179,7 +182,8 @@ TEST(Induction, ReportedEnergyIsThePotentialOfTheForce) {
       g[k] = -(run(c.at + d * Vec3::Unit(k)).energy - run(c.at - d * Vec3::Unit(k)).energy) / (2 * d);
     }
     EXPECT_LT((g - r.force[1]).norm(), 0.01 * r.force[1].norm())
-        << (c.magnet ? "magnet" : "two spheres") << ": -dE/dx " << g.transpose() << " F " << r.force[1].transpose();
+        << (c.magnet ? "magnet" : "two spheres") << ", chi " << c.chi << ": -dE/dx " << g.transpose() << " F "
+        << r.force[1].transpose();
   }
 }
 
