@@ -37,16 +37,14 @@ CostEstimate estimate_cost(const scene::Scene& scene, const magnetics::Model& mo
   }
   e.trial_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   // A bake evaluates the magnetics once per substep (the first substep of a frame reuses the
-  // previous frame's closing evaluation), as the trial does with its one-step frames.
+  // previous frame's closing evaluation), as the trial does with its one-step frames, so every
+  // count scales with the steps.
   const double scale = static_cast<double>(e.nominal_steps) / e.trial_steps;
   e.substeps = substeps * scale;
-  const double per_eval_iterations = evaluations > 0 ? iterations / evaluations : 0;
-  const double per_eval_visited = evaluations > 0 ? visited / evaluations : 0;
-  const double per_eval_seconds = evaluations > 0 ? mag / evaluations : 0;
-  e.evaluations = e.substeps;
-  e.induction_iterations = per_eval_iterations * e.evaluations;
-  e.cells_visited = per_eval_visited * e.evaluations;
-  e.magnetics_seconds = per_eval_seconds * e.evaluations;
+  e.evaluations = evaluations * scale;
+  e.induction_iterations = iterations * scale;
+  e.cells_visited = visited * scale;
+  e.magnetics_seconds = mag * scale;
   e.rigid_seconds = rigid * scale;
   return e;
 }

@@ -66,9 +66,9 @@ bool adjust_internal_edges(btManifoldPoint& cp, const btCollisionObjectWrapper* 
   return true;
 }
 
-// Bullet's world with one change before each contact solve: every contact point of a magnetic
-// body gets its point on A moved onto the line through its point on B along the contact normal
-// (p_A = p_B + d n). Bullet applies a contact impulse j at p_A to one body and -j at p_B to the
+// Bullet's world with two changes before each contact solve, for every contact point of a
+// magnetic body: its point on A is moved onto the line through its point on B along the contact
+// normal (p_A = p_B + d n), and its warm-start impulses are cleared. Bullet applies a contact impulse j at p_A to one body and -j at p_B to the
 // other; a stale persistent point whose two ends have drifted apart sideways (by 0.1-1 um in a
 // snapped, spinning pair) then applies a net torque (p_A - p_B) x j. Against a magnetic pull of
 // tens of newtons that torque is what turned a magnetically held dumbbell over (its angular
@@ -88,6 +88,13 @@ class ContactWorld : public btDiscreteDynamicsWorld {
       for (int c = 0; c < mf->getNumContacts(); ++c) {
         btManifoldPoint& pt = mf->getContactPoint(c);
         pt.m_positionWorldOnA = pt.m_positionWorldOnB + pt.m_normalWorldOnB * pt.getDistance();
+        // No warm start: Bullet would start the solve from 85% of last substep's impulses, which
+        // are wrong once the magnetic pull has changed; the error showed up as hops of snapped
+        // magnets (a snapped cube pair gained 2.2% of its binding energy at dt 1 ms with warm
+        // starting, 1.0% without). Other contacts keep it.
+        pt.m_appliedImpulse = 0;
+        pt.m_appliedImpulseLateral1 = 0;
+        pt.m_appliedImpulseLateral2 = 0;
       }
     }
     btDiscreteDynamicsWorld::solveConstraints(info);
@@ -359,21 +366,6 @@ void RigidWorld::step(double t, double h, const std::vector<Vec3>& force, const 
       // Forces are cleared by every stepSimulation call, which also applies gravity once.
       b->applyCentralForce(bt(force[i]));
       b->applyTorque(bt(torque[i]));
-    }
-  }
-  // No warm start for contacts that involve a magnetic body: Bullet would start the solve from
-  // 85% of last substep's impulses, which are wrong once the magnetic pull has changed, and the
-  // error shows up as hops of snapped magnets (measured: a snapped cube pair gained 2.2% of its
-  // binding energy at dt 1 ms with warm starting, 1.0% without). Other contacts keep it.
-  for (int k = 0; k < m.dispatcher.getNumManifolds(); ++k) {
-    btPersistentManifold* mf = m.dispatcher.getManifoldByIndexInternal(k);
-    const int a = mf->getBody0()->getUserIndex(), b = mf->getBody1()->getUserIndex();
-    if ((a < 0 || !m.magnetic[a]) && (b < 0 || !m.magnetic[b])) continue;
-    for (int c = 0; c < mf->getNumContacts(); ++c) {
-      btManifoldPoint& pt = mf->getContactPoint(c);
-      pt.m_appliedImpulse = 0;
-      pt.m_appliedImpulseLateral1 = 0;
-      pt.m_appliedImpulseLateral2 = 0;
     }
   }
   m.world->stepSimulation(h, 0, h);

@@ -14,6 +14,10 @@
 namespace magbake::sim {
 namespace {
 
+// The contact skin of a pair: 1e-3 of the smaller body's smallest extent, from the two bodies'
+// smallest half extents (radii for spheres), m.
+btScalar contact_skin(btScalar half_a, btScalar half_b) { return 2e-3 * std::min(half_a, half_b); }
+
 // Passes the grown boxes' points on with the skin taken off again. Bullet's convention:
 // normal on B pointing towards A, point on B, depth < 0 for penetration.
 struct SkinResult : public btDiscreteCollisionDetectorInterface::Result {
@@ -60,8 +64,7 @@ class SkinBoxBoxAlgorithm : public ManifoldAlgorithm {
     if (!manifold_) return;
     const btVector3 ha = static_cast<const btBoxShape*>(a->getCollisionShape())->getHalfExtentsWithMargin();
     const btVector3 hb = static_cast<const btBoxShape*>(b->getCollisionShape())->getHalfExtentsWithMargin();
-    // 1e-3 of the smaller box's smallest extent (half extents here).
-    const btScalar skin = 2e-3 * std::min(ha[ha.minAxis()], hb[hb.minAxis()]);
+    const btScalar skin = contact_skin(ha[ha.minAxis()], hb[hb.minAxis()]);
     const btBoxShape grown_a(ha + btVector3(skin, skin, skin));
     const btBoxShape grown_b(hb + btVector3(skin, skin, skin));
     out->setPersistentManifold(manifold_);
@@ -90,7 +93,7 @@ class SkinSphereSphereAlgorithm : public ManifoldAlgorithm {
     const btScalar rb = static_cast<const btSphereShape*>(b->getCollisionShape())->getRadius();
     const btVector3 diff = a->getWorldTransform().getOrigin() - b->getWorldTransform().getOrigin();
     const btScalar len = diff.length();
-    const btScalar skin = 2e-3 * std::min(ra, rb);
+    const btScalar skin = contact_skin(ra, rb);
     if (len > ra + rb + skin || len <= SIMD_EPSILON * (ra + rb)) {
       out->refreshContactPoints();
       return;
