@@ -360,6 +360,8 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
   }
   Model m = model_from_cells(static_cast<int>(bodies.size()), cells, parts, settings.leaf_size);
   m.part_report = reports;
+  m.body_isotropic.assign(bodies.size(), 0);
+  for (std::size_t b = 0; b < bodies.size(); ++b) m.body_isotropic[b] = bodies[b].isotropic && m.body_induced[b] && !m.body_permanent[b];
   build_induction_model(m, part_solid, settings);
   return m;
 }

@@ -199,7 +199,6 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
       s.induced_moment[t.original[q]] = x.segment<3>(3 * q);
       rep.energy -= 0.5 * x.segment<3>(3 * q).dot(B0[q]);
     }
-    s.induced_rotation = s.body_rotation;
   };
   const double bnorm = std::sqrt(dot(b, b));
   if (st.induction == InductionMode::kPaper || bnorm == 0.0) {
@@ -246,16 +245,11 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
     });
   };
 
-  // Warm start from the previous moments when they exist (turned with their bodies since they
-  // were written), else from the one-pass answer.
+  // Warm start from the previous moments (world frame) when they exist, else from the one-pass
+  // answer.
   Vector x(3 * n);
-  bool warm = s.induced_moment.size() == m.induced_cells.size();
-  const bool turn = s.induced_rotation.size() == s.body_rotation.size();
-  for (int q = 0; q < n && warm; ++q) {
-    const Vec3& prev = s.induced_moment[t.original[q]];
-    const int b = m.cell_body[t.cell[q]];
-    x.segment<3>(3 * q) = turn ? Vec3(s.body_rotation[b] * (s.induced_rotation[b].transpose() * prev)) : prev;
-  }
+  const bool warm = s.induced_moment.size() == m.induced_cells.size();
+  for (int q = 0; q < n && warm; ++q) x.segment<3>(3 * q) = s.induced_moment[t.original[q]];
   if (!warm || dot(x, x) == 0.0) x = b;
 
   // Restarted GMRES (modified Gram–Schmidt, Givens rotations).

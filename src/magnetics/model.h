@@ -26,6 +26,11 @@ struct PartSpec {
 /// puts it at the centre of mass). Bodies without magnetic parts get no cells and cost nothing.
 struct BodySpec {
   std::vector<PartSpec> parts;
+  /// The body's magnetic energy cannot depend on its orientation: a soft (linear, isotropic)
+  /// sphere centred on the body origin and nothing else. Its magnetic torque about the origin is
+  /// then exactly zero, and Model::body_isotropic makes evaluate() report zero instead of the
+  /// cell staircase's spurious torque (physics.md §8).
+  bool isotropic = false;
 };
 
 /// Knobs of the cell decomposition.
@@ -62,6 +67,9 @@ struct Model {
   std::vector<int> body_root;            ///< root node of body b, -1 if the body has no cells
   std::vector<std::uint8_t> body_permanent;  ///< body has permanently magnetized cells
   std::vector<std::uint8_t> body_induced;    ///< body has induced (linear/superconducting) cells
+  /// Body whose exact magnetic torque about its origin is zero (BodySpec::isotropic); its
+  /// reported torque is zero. Empty or 0 for a model read back from a cache.
+  std::vector<std::uint8_t> body_isotropic;
 
   // ---- parts (npart)
   std::vector<int> part_body;            ///< owning body

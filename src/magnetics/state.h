@@ -81,10 +81,10 @@ Targets Targets::from_grid(const Vec3& origin, double voxel, const Eigen::Vector
 struct State {
   std::vector<Pose> body_pose;        ///< (nbody) body frame -> world; input
 
-  std::vector<Vec3> induced_moment;   ///< (ninduced) world, A·m²; output and next warm start
-  /// (nbody) each body's rotation when induced_moment was written; the warm start turns the
-  /// moments with their bodies. Empty: written at the current rotations (a restored state).
-  std::vector<Mat3> induced_rotation;
+  /// (ninduced) world, A·m²; output and the next solve's warm start, used as it stands in the
+  /// world frame (induced moments follow the field, not the body: turning them with a spinning
+  /// ball made the warm start worse than none).
+  std::vector<Vec3> induced_moment;
 
   // ---- derived each evaluation (world frame)
   std::vector<Vec3> cell_offset;      ///< (ncell x 3) cell position minus body origin, m

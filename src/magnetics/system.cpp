@@ -48,7 +48,6 @@ void place(const Model& m, State& s, const std::vector<Vec3>& induced) {
   s.total.cell = s.permanent.cell;
   if (induced.size() == m.induced_cells.size()) {
     s.induced_moment = induced;
-    s.induced_rotation = s.body_rotation;
     for (std::size_t q = 0; q < m.induced_cells.size(); ++q) s.total.cell[m.induced_cells[q]] += induced[q];
   }
   s.total.aggregate(m);
@@ -105,6 +104,9 @@ void evaluate(const Model& m, const Settings& st, State& s, Result& res) {
       res.torque[b] += res.moment[b].cross(st.external_field);
       res.energy -= perm.dot(st.external_field);
     }
+    // A soft sphere's energy does not change as it turns, so its torque is exactly zero; the
+    // cells' staircase (one cube for a small ball) would otherwise spin it up (physics.md §8).
+    if (b < static_cast<int>(m.body_isotropic.size()) && m.body_isotropic[b]) res.torque[b].setZero();
   }
 }
 

@@ -53,10 +53,7 @@ void Simulator::restore(const SimState& s, int frame) {
   state_ = s;
   world_->set_state(state_);
   frame_ = frame;
-  if (state_.induced_moment.size() == model_.induced_cells.size()) {
-    mag_state_.induced_moment = state_.induced_moment;
-    mag_state_.induced_rotation.clear();  // written at the restored poses
-  }
+  if (state_.induced_moment.size() == model_.induced_cells.size()) mag_state_.induced_moment = state_.induced_moment;
   FrameDiagnostics d;
   evaluate_magnetics(d);
   last_energy_ = measure().total_energy();
