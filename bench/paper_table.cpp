@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -238,11 +239,19 @@ struct Knobs {
   std::optional<double> theta;      ///< overrides the preset's
   std::optional<double> near_field;
   std::optional<int> near_field_order;
+  std::optional<double> induction_tolerance;  ///< overrides the caller's tolerance
 };
 
 Knobs knob(std::string label, std::string quality, double resolution = 1, std::optional<double> theta = {},
            std::optional<double> near_field = {}, std::optional<int> near_field_order = {}) {
-  return Knobs{std::move(label), std::move(quality), resolution, theta, near_field, near_field_order};
+  return Knobs{std::move(label), std::move(quality), resolution, theta, near_field, near_field_order, std::nullopt};
+}
+
+/// The default preset with another induction tolerance (relative GMRES residual).
+Knobs tolerance_knob(std::string label, double tolerance) {
+  Knobs k = knob(std::move(label), "default");
+  k.induction_tolerance = tolerance;
+  return k;
 }
 
 scene::Scene with_knobs(const scene::Scene& base, const Knobs& k) {
@@ -269,13 +278,15 @@ struct Evaluated {
 };
 
 Evaluated evaluate_knobs(const scene::Scene& base, const Knobs& k, const std::vector<magnetics::Pose>& poses,
-                         int threads, int repeats, double tolerance) {
+                         int threads, int repeats, std::optional<double> tolerance) {
   tbb::global_control gc(tbb::global_control::max_allowed_parallelism, threads);
   const scene::Scene sc = with_knobs(base, k);
   const magnetics::Model model = scene::build_magnetics_model(sc);
   magnetics::Settings st = scene::magnetics_settings(sc);
-  st.induction_tolerance = tolerance;
-  if (tolerance < 1e-8) {
+  // The knob's tolerance, else the caller's (references), else the preset's.
+  if (k.induction_tolerance) st.induction_tolerance = *k.induction_tolerance;
+  else if (tolerance) st.induction_tolerance = *tolerance;
+  if (st.induction_tolerance < 1e-8) {
     // References: long Krylov cycles. GMRES(50) stalls on clusters of touching high-chi bodies
     // at fine resolution (BowlSpheres: residual 9e-4 after 1000 iterations).
     st.induction_restart = 300;
@@ -391,17 +402,26 @@ json error_at_instant(const scene::Scene& sc, const io::CacheReader& cache, cons
       knob("default th0.7", "default", 1.0, 0.7),
       knob("default th0.9", "default", 1.0, 0.9),
       knob("default near0", "default", 1.0, std::nullopt, 0.0),
+      tolerance_knob("default tol1e-7", 1e-7),
+      tolerance_knob("default tol1e-5", 1e-5),
+      tolerance_knob("default tol1e-4", 1e-4),
+      tolerance_knob("default tol1e-3", 1e-3),
   };
   json rows = json::array();
+  std::map<std::string, magnetics::Result> results;  // to show what the tolerance alone changes
   for (const Knobs& k : knobs) {
     Evaluated e;
     try {
-      e = evaluate_knobs(sc, k, poses, 1, 3, 1e-7);
+      e = evaluate_knobs(sc, k, poses, 1, 3, std::nullopt);
     } catch (const std::exception& ex) {
       std::cerr << "  " << k.label << ": " << ex.what() << "\n";
       continue;
     }
     const ErrorStats err = force_error(e.result, ref->result);
+    results[k.label] = e.result;
+    const bool default_preset = k.label == "default" || k.induction_tolerance;
+    const auto tight = results.find("default tol1e-7");
+    const double from_default = default_preset && tight != results.end() ? largest_change(e.result, tight->second) : NAN;
     const scene::Scene kn = with_knobs(sc, k);
     csv << a.label << ',' << frame << ',' << k.label << ',' << kn.magnetics.quality << ','
         << (kn.magnetics.cell_size ? *kn.magnetics.cell_size : 0.0) << ',' << kn.magnetics.cells_per_extent << ','
@@ -411,10 +431,18 @@ json error_at_instant(const scene::Scene& sc, const io::CacheReader& cache, cons
     csv.flush();
     rows.push_back({{"label", k.label}, {"cells", e.cells}, {"ms", 1e3 * e.seconds}, {"max_rel_error", err.max_rel},
                     {"rms_rel_error", err.rms_rel}, {"max_error_over_largest_force", err.max_over_largest},
-                    {"bodies", err.bodies}});
+                    {"bodies", err.bodies}, {"induction_iterations", e.result.induction.iterations},
+                    {"change_from_tight_solve", std::isnan(from_default) ? json(nullptr) : json(from_default)}});
     std::cerr << "  " << a.label << " frame " << frame << ": " << k.label << ", " << e.cells << " cells, "
               << 1e3 * e.seconds << " ms, force error max " << err.max_rel << " rms " << err.rms_rel << " over "
-              << err.bodies << " bodies\n";
+              << err.bodies << " bodies, " << e.result.induction.iterations << " induction iterations"
+              << (std::isnan(from_default) ? "" : ", change from the 1e-7 solve " + std::to_string(from_default)) << "\n";
+  }
+  // The default row was evaluated before the tight solve it is compared with.
+  if (results.count("default") && results.count("default tol1e-7")) {
+    for (json& row : rows) {
+      if (row["label"] == "default") row["change_from_tight_solve"] = largest_change(results["default"], results["default tol1e-7"]);
+    }
   }
   return {{"frame", frame}, {"reference", conv}, {"reference_converged", converged},
           {"reference_error_estimate_first_order", std::isnan(estimated_ref_error) ? json(nullptr) : json(estimated_ref_error)},

@@ -93,6 +93,9 @@ struct MagneticsSettings {
   int cells_per_extent = 4;          ///< preset: cells across the smallest extent of each part
   double theta = 0.5;
   std::string induction = "coupled";  ///< coupled | paper | off
+  /// Coupled induction: GMRES stops when the residual is below this fraction of the right-hand
+  /// side (preset; physics.md §7 for what it changes in the forces).
+  double induction_tolerance = 1e-4;
   Vec3 external_field = Vec3::Zero();  ///< T
   double near_field = 2.5;           ///< cell sizes (exact cuboid interactions within)
   int near_field_order = 4;

@@ -8,8 +8,10 @@ bool apply_quality_preset(const std::string& quality, MagneticsSettings& mg) {
     int cells_per_extent;
     double theta, near_field;
     int near_field_order;
+    double induction_tolerance;
   };
-  static constexpr Preset kPresets[] = {{"draft", 2, 0.7, 1.5, 3}, {"default", 4, 0.5, 2.5, 4}, {"high", 8, 0.3, 4.0, 6}};
+  static constexpr Preset kPresets[] = {
+      {"draft", 2, 0.7, 1.5, 3, 1e-3}, {"default", 4, 0.5, 2.5, 4, 1e-4}, {"high", 8, 0.3, 4.0, 6, 1e-6}};
   for (const Preset& p : kPresets) {
     if (quality != p.name) continue;
     mg.quality = quality;
@@ -17,6 +19,7 @@ bool apply_quality_preset(const std::string& quality, MagneticsSettings& mg) {
     mg.theta = p.theta;
     mg.near_field = p.near_field;
     mg.near_field_order = p.near_field_order;
+    mg.induction_tolerance = p.induction_tolerance;
     return true;
   }
   return false;
@@ -31,6 +34,7 @@ magnetics::Settings magnetics_settings(const Scene& sc) {
   st.external_field = sc.magnetics.external_field;
   st.near_field = sc.magnetics.near_field;
   st.near_field_order = sc.magnetics.near_field_order;
+  st.induction_tolerance = sc.magnetics.induction_tolerance;
   return st;
 }
 

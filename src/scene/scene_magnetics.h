@@ -10,7 +10,7 @@
 
 namespace magbake::scene {
 
-/// Sets quality, cells_per_extent, theta, near_field and near_field_order to the preset
+/// Sets quality, cells_per_extent, theta, near_field, near_field_order and induction_tolerance to the preset
 /// `quality` (draft | default | high; docs/scene-format.md); false (nothing changed) if unknown.
 /// cell_size and induction are left as they are.
 bool apply_quality_preset(const std::string& quality, MagneticsSettings& mg);

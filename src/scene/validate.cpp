@@ -365,6 +365,13 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       mg.induction = s.induction.v;
     }
   }
+  if (s.induction_tolerance.set) {
+    if (!(s.induction_tolerance.v >= 1e-12 && s.induction_tolerance.v <= 0.1)) {
+      d.add(s.induction_tolerance.loc, "magnetics.induction_tolerance", "must be in [1e-12, 0.1]");
+    } else {
+      mg.induction_tolerance = s.induction_tolerance.v;
+    }
+  }
   if (s.external_field.set) mg.external_field = vec3(s.external_field);
 
   // Materials.

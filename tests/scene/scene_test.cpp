@@ -37,10 +37,16 @@ TEST(Scene, PresetsSetCellSizeThetaAndNearField) {
   EXPECT_EQ(load("high").magnetics.cells_per_extent, 8);
   EXPECT_DOUBLE_EQ(load("high").magnetics.theta, 0.3);
   EXPECT_DOUBLE_EQ(load("draft").magnetics.theta, 0.7);
+  EXPECT_DOUBLE_EQ(load("draft").magnetics.induction_tolerance, 1e-3);
+  EXPECT_DOUBLE_EQ(load("default").magnetics.induction_tolerance, 1e-4);
+  EXPECT_DOUBLE_EQ(load("high").magnetics.induction_tolerance, 1e-6);
   const Scene explicit_cell = load_scene_text(
-      "magbake: 1\nunits: {length: mm, angle: deg}\nmagnetics: {quality: high, cell_size: 2, theta: 0.4}\n", "x.yaml");
+      "magbake: 1\nunits: {length: mm, angle: deg}\n"
+      "magnetics: {quality: high, cell_size: 2, theta: 0.4, induction_tolerance: 1.0e-8}\n",
+      "x.yaml");
   EXPECT_DOUBLE_EQ(*explicit_cell.magnetics.cell_size, 0.002);
   EXPECT_DOUBLE_EQ(explicit_cell.magnetics.theta, 0.4);
+  EXPECT_DOUBLE_EQ(magnetics_settings(explicit_cell).induction_tolerance, 1e-8);
 }
 
 TEST(Scene, KinematicKeysInterpolateAndHold) {

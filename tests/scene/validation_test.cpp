@@ -137,6 +137,9 @@ TEST(SceneValidation, DuplicateKeys) {
 TEST(SceneValidation, BadUnitsAndEnumerations) {
   EXPECT_TRUE(has(problems("magbake: 1\nunits: {length: inch, angle: deg}\n"), 2, 17, "expected m, cm or mm"));
   EXPECT_TRUE(has(problems(kHead + "magnetics: {induction: strong}\n"), 3, 24, "expected coupled, paper or off"));
+  EXPECT_TRUE(has(problems(kHead + "magnetics: {induction_tolerance: 0}\n"), 3, 34, "must be in [1e-12, 0.1]"));
+  EXPECT_TRUE(has(problems(kHead + "magnetics: {induction_tolerance: 0.5}\n"), 3, 34, "must be in [1e-12, 0.1]"));
+  EXPECT_TRUE(has(problems(kHead + "magnetics: {induction_tolerance: .nan}\n"), 3, 34, ""));
   EXPECT_TRUE(has(problems(kHead + "materials:\n  m: {kind: permanant, remanence: 1}\n"), 4, 13, "did you mean 'permanent'"));
 }
 
