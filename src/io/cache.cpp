@@ -107,6 +107,7 @@ CacheWriter::CacheWriter(const std::string& path, const scene::Scene& sc, const 
     h5::attr_int(p.id(), "near_field_order", {mg.near_field_order});
     h5::attr_double(p.id(), "induction_near", {model.induction_near});
     h5::attr_string(p.id(), "induction", mg.induction);
+    h5::attr_double(p.id(), "induction_tolerance", {mg.induction_tolerance});
     h5::attr_double(p.id(), "external_field", {mg.external_field[0], mg.external_field[1], mg.external_field[2]});
   }
 
