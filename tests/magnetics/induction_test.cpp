@@ -131,6 +131,32 @@ TEST(Induction, TouchingSoftSpheresAttractAlongTheField) {
   EXPECT_GT(r.force[1][0], 0.0);
 }
 
+// The warm start is the previous moments as they stand in the world frame: induced moments follow
+// the field, not the body. Two one-cell soft cubes side by side, turned a quarter turn about the
+// vertical in place, are the same magnetic system, so the second solve starts converged; turning
+// the old moments with the bodies (as magbake did before) starts it a quarter turn off.
+TEST(Induction, WarmStartStaysInTheWorldFrame) {
+  Rig s;
+  s.add(std::make_unique<geometry::BoxShape>(Vec3(0.004, 0.004, 0.004)), linear(700));
+  s.add(std::make_unique<geometry::BoxShape>(Vec3(0.004, 0.004, 0.004)), linear(700));
+  s.build(0.004);
+  ASSERT_EQ(s.model.induced_cells.size(), 2u);
+  Settings st;
+  st.external_field = Vec3(0.01, 0, 0);
+  st.induction_tolerance = 1e-9;
+  s.state.body_pose[0].position = Vec3(-0.0025, 0, 0);
+  s.state.body_pose[1].position = Vec3(0.0025, 0, 0);
+  Result first, second;
+  evaluate(s.model, st, s.state, first);
+  EXPECT_GT(first.induction.iterations, 0);
+  const Quat quarter(Eigen::AngleAxisd(std::numbers::pi / 2, Vec3::UnitZ()));
+  for (Pose& p : s.state.body_pose) p.rotation = quarter;
+  evaluate(s.model, st, s.state, second);
+  EXPECT_EQ(second.induction.iterations, 0);
+  EXPECT_LE(second.induction.residual, 1e-9);
+  for (int b = 0; b < 2; ++b) EXPECT_LT((second.moment[b] - first.moment[b]).norm(), 1e-9 * first.moment[b].norm());
+}
+
 // A permanent magnet attracts soft iron and a paramagnet, repels a diamagnet and a superconductor.
 TEST(Induction, SignOfTheForceFollowsTheSusceptibility) {
   for (double chi : {700.0, 1e-5, -1e-5, -1.0}) {
