@@ -21,13 +21,16 @@ extern "C" __m256d _ZGVdN4v_log(__m256d x);
 namespace magbake::magnetics {
 namespace {
 
-// ln(a + R) without cancellation when a ~ -R (R = sqrt(a² + q2), q2 = the other two squares).
-inline double log_plus_r(double a, double R, double q2) {
-  if (a >= 0.0) return std::log(a + R);
+// a + R without cancellation when a ~ -R (R = sqrt(a² + q2), q2 = the other two squares).
+inline double plus_r(double a, double R, double q2) {
+  if (a >= 0.0) return a + R;
   // a + R = q2 / (R - a); on the extension of an edge q2 -> 0 and the two corners that share
   // the line cancel, so a tiny floor keeps both terms finite and equal.
-  return std::log(std::max(q2, 1e-300 * R * R + 1e-300) / (R - a));
+  return std::max(q2, 1e-300 * R * R + 1e-300) / (R - a);
 }
+
+// ln(a + R), see plus_r.
+inline double log_plus_r(double a, double R, double q2) { return std::log(plus_r(a, R, q2)); }
 
 // H (in units of sigma / 4pi) at p of the rectangle u in [u0,u1], v in [v0,v1] in the plane
 // w = w0, charge density 1; p in (u, v, w) coordinates; result in (u, v, w) components. With
@@ -173,9 +176,7 @@ Mat3 cuboid_h_tensor(const Vec3& half, const Vec3& x) {
     const double R = std::sqrt(d2[0] + d2[1] + d2[2]);
     for (int k = 0; k < 3; ++k) {
       const int u = (k + 1) % 3, v = (k + 2) % 3;
-      // ln(d_k + R) as in log_plus_r: its argument without cancellation.
-      const double q2 = d2[u] + d2[v];
-      log_arg[3 * q + k] = d[k] >= 0.0 ? d[k] + R : std::max(q2, 1e-300 * R * R + 1e-300) / (R - d[k]);
+      log_arg[3 * q + k] = plus_r(d[k], R, d2[u] + d2[v]);
       const double num = d[u] * d[v], den = d[k] * R;
       at_y[3 * q + k] = d[k] >= 0.0 ? num : -num;
       at_x[3 * q + k] = d[k] >= 0.0 ? den : -den;

@@ -26,10 +26,10 @@ struct PartSpec {
 /// puts it at the centre of mass). Bodies without magnetic parts get no cells and cost nothing.
 struct BodySpec {
   std::vector<PartSpec> parts;
-  /// The body's magnetic energy cannot depend on its orientation: a soft (linear, isotropic)
-  /// sphere centred on the body origin and nothing else. Its magnetic torque about the origin is
-  /// then exactly zero, and Model::body_isotropic makes evaluate() report zero instead of the
-  /// cell staircase's spurious torque (physics.md §8).
+  /// The body is one sphere centred on the body origin. If its cells are also all induced (a
+  /// soft, isotropic sphere: build_model checks), its energy cannot depend on its orientation,
+  /// its magnetic torque about the origin is exactly zero, and Model::body_isotropic makes
+  /// evaluate() report zero instead of the cell staircase's spurious torque (physics.md §8).
   bool isotropic = false;
 };
 

@@ -65,10 +65,9 @@ magnetics::Model build_magnetics_model(const Scene& sc) {
     };
     add(b.shape, Pose{}, b.material, b.magnetization);
     for (const Part& p : b.parts) add(p.shape, p.pose, p.material, p.magnetization);
-    // A lone soft sphere (centre of mass at its centre) cannot feel a torque.
-    bodies[i].isotropic = b.parts.empty() && b.shape.kind == geometry::ShapeKind::kSphere && b.material >= 0 &&
-                          (sc.materials[b.material].kind == magnetics::MaterialKind::kLinear ||
-                           sc.materials[b.material].kind == magnetics::MaterialKind::kSuperconductor) && b.com.norm() < 1e-12;
+    // A lone sphere centred on its centre of mass: if it is soft (the library checks that from
+    // its cells), it cannot feel a torque.
+    bodies[i].isotropic = b.parts.empty() && b.shape.kind == geometry::ShapeKind::kSphere && b.com.norm() < 1e-12;
   }
   magnetics::BuildSettings bs;
   bs.cell_size = sc.magnetics.cell_size.value_or(0.001);
