@@ -31,6 +31,15 @@ Mat3 cross_body_tensor(const Model& m, const Settings& st, const State& s, int t
   const Cuboid cj{center(j), s.part_rotation[m.cell_part[j]], m.cell_half[j], Vec3::Zero()};
   const Vec3 r = s.body_pose[m.cell_body[t]].position + s.cell_offset[t] -
                  (s.body_pose[m.cell_body[j]].position + s.cell_offset[j]);
+  if (!m.cell_full[t] || !m.cell_full[j]) {
+    // A boundary cell is a point dipole at its material's centroid, clamped as in the force
+    // kernels: its cuboid reaches outside the body, and the cuboids of two touching bodies
+    // overlap, where their mean field (the inside field, -M/3) made the pair's induction
+    // nearly singular (two steel balls in contact got 1e8 A/m and 15 kN, physics.md §7).
+    const double d_min = m.cell_clamp[t] + m.cell_clamp[j];
+    const double d = r.norm();
+    return d < d_min ? Mat3(dipole_tensor(r * (d_min / d)) - dipole_tensor(r)) : Mat3(Mat3::Zero());
+  }
   // Order 3 (27 points) next to each other, 2 beyond: the integrand is smooth there.
   const double gap = (ct.center - cj.center).norm() / (m.cell_half[t].maxCoeff() + m.cell_half[j].maxCoeff());
   const int order = std::clamp(gap < 1.5 ? st.near_field_order - 1 : 2, 2, 3);
@@ -74,7 +83,11 @@ void build_near_rows(const Model& m, const Settings& st, State& s) {
           const int tc = t.cell[q];
           for (int c = m.node_begin[nd]; c < m.node_end[nd]; ++c) {
             if (m.cell_chi[c] == 0.0 && m.cell_moment[c].squaredNorm() == 0.0) continue;
-            const double lim = m.induction_near * (m.cell_half[tc].maxCoeff() + m.cell_half[c].maxCoeff());
+            // Full pairs get their cuboids' mean field within the near radius; a pair with a
+            // boundary cell only its clamp (cross_body_tensor).
+            const double lim = m.cell_full[tc] && m.cell_full[c]
+                                   ? m.induction_near * (m.cell_half[tc].maxCoeff() + m.cell_half[c].maxCoeff())
+                                   : m.cell_clamp[tc] + m.cell_clamp[c];
             if ((origin + s.cell_offset[c] - t.position[q]).squaredNorm() < lim * lim) cross[q].push_back(c);
           }
         }

@@ -426,6 +426,26 @@ RigidWorld::Penetration RigidWorld::deepest_penetration() const {
   return out;
 }
 
+void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out) const {
+  const Impl& m = *impl_;
+  out.resize(m.scene.bodies.size());
+  for (auto& n : out) n.clear();
+  btCollisionDispatcher& d = const_cast<btCollisionDispatcher&>(m.dispatcher);
+  for (int k = 0; k < d.getNumManifolds(); ++k) {
+    const btPersistentManifold* mf = d.getManifoldByIndexInternal(k);
+    const int a = mf->getBody0()->getUserIndex(), b = mf->getBody1()->getUserIndex();
+    for (int c = 0; c < mf->getNumContacts(); ++c) {
+      const btManifoldPoint& pt = mf->getContactPoint(c);
+      if (pt.getDistance() >= 1e-4) continue;
+      // Bullet's normal on B points towards A: it pushes A away from B, and B the other way.
+      const Vec3 n(pt.m_normalWorldOnB.x(), pt.m_normalWorldOnB.y(), pt.m_normalWorldOnB.z());
+      if (a >= 0) out[a].push_back(n);
+      if (b >= 0) out[b].push_back(-n);
+      break;  // one normal per manifold: its points share it
+    }
+  }
+}
+
 std::vector<RigidWorld::Penetration> RigidWorld::separate_overlaps(double tolerance, int max_iterations) {
   Impl& m = *impl_;
   std::map<std::pair<int, int>, double> first;  // initial depth per pair

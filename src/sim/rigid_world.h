@@ -41,6 +41,10 @@ class RigidWorld {
   double closing_rate() const;
   /// Deepest penetration among the contact points of the last step's collision detection.
   Penetration deepest_penetration() const;
+  /// Contact normals of the last step's collision detection, per scene body: for every manifold
+  /// with a point closer than 0.1 mm, the unit normal (world frame) along which the contact
+  /// pushes that body away from its partner. Bodies without such a contact get an empty list.
+  void contact_normals(std::vector<std::vector<Vec3>>& out) const;
   /// Moves dynamic bodies apart along their contact normals until no pair penetrates deeper
   /// than `tolerance` (m). Positions only: velocities are kept, so no kinetic energy is added.
   /// Returns the pairs that overlapped by more than `tolerance` before, deepest first.

@@ -81,14 +81,25 @@ void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
 
 int Simulator::substep_split(double h) const {
   // Magnetic stiffness: h sqrt(k/m) <= 0.5 with k = 4|F|/l, l = a quarter of the body's
-  // smallest extent (at most 64 pieces). |F| includes the pull that a contact carries: leaving
-  // it out (resting contact without substeps) made a snapped spinning pair rock and blow apart
-  // at dt 1 ms, because the pair's rotational and shear stiffness is explicit too.
+  // smallest extent (at most 64 pieces). For most bodies |F| includes the pull that a contact
+  // carries: leaving it out (resting contact without substeps) made a snapped spinning pair of
+  // magnets rock and blow apart at dt 1 ms, because the pair's rotational and shear stiffness
+  // is explicit too. A body with no magnetic torque (a soft sphere, Model::body_isotropic) has
+  // no rotational stiffness, and the part of its pull that presses it into a contact is held by
+  // that contact, so only the rest of its force (the part that can move it) counts.
+  world_->contact_normals(contact_normals_);
   int split = 1;
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     const scene::Body& b = scene_.bodies[i];
     if (b.motion != scene::Motion::kDynamic || b.mass <= 0) continue;
-    const double k_lin = 4.0 * state_.magnetic_force[i].norm() / stiffness_length_[i];
+    Vec3 free = state_.magnetic_force[i];
+    if (i < model_.body_isotropic.size() && model_.body_isotropic[i]) {
+      for (const Vec3& n : contact_normals_[i]) {
+        const double press = free.dot(n);
+        if (press < 0) free -= press * n;
+      }
+    }
+    const double k_lin = 4.0 * free.norm() / stiffness_length_[i];
     const double rate = std::sqrt(k_lin / b.mass);
     if (rate * h > 0.5) split = std::max(split, static_cast<int>(std::ceil(rate * h / 0.5)));
   }

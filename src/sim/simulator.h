@@ -78,6 +78,7 @@ class Simulator {
   SimState state_;
   int frame_ = 0;
   std::vector<double> stiffness_length_;  // per body, m
+  mutable std::vector<std::vector<Vec3>> contact_normals_;  // per body, scratch of substep_split()
   std::vector<RigidWorld::Penetration> initial_overlaps_;
   double last_energy_ = 0;  // total energy at the current frame, J (for energy_drift)
 };

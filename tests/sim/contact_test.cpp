@@ -150,6 +150,47 @@ TEST(Contact, SpinningSnappedDumbbellKeepsItsAngularMomentum) {
   EXPECT_LT(worst_gap, 5e-5);                 // and they stay snapped
 }
 
+// A steel ball (radius 5 mm, chi 700) resting on top of a cylinder magnet, dt 1 ms: the pull that
+// presses it into the contact is the contact's, and a soft sphere has no magnetic torque, so
+// resting needs no substeps (issue 11, outcome 2; physics.md §8). The same ball 2 mm above the
+// magnet, snapping onto it, does get them: the force guard still holds off approaching bodies.
+TEST(Contact, SteelBallRestingOnAMagnetNeedsNoSubsteps) {
+  auto scene = [](double z) {
+    return "magbake: 1\nunits: {length: mm, angle: deg}\ntime: {fps: 100, frames: [1, 31], dt: 0.001}\n"
+           "gravity: [0, 0, -9810]\nmaterials: {N42: {kind: permanent, remanence: 1.3, density: 7500},"
+           " steel: {kind: soft, chi: 700, density: 7850}}\n"
+           "magnetics: {induction: coupled}\n"
+           "bodies:\n"
+           "  - {name: magnet, shape: {cylinder: {radius: 6, height: 10}}, material: N42, magnetization: [0, 0, 1],"
+           " motion: static}\n"
+           "  - {name: ball, shape: {sphere: {radius: 5}}, material: steel, friction: 0.5, position: [0, 0, " +
+           std::to_string(z) + "]}\n";
+  };
+  Bake rest(scene(10.0));
+  const Vec3 start = rest.sim->state().com_position[1];
+  int late_substeps = 0;
+  double lowest = 1e300, worst_rise = 0;
+  for (int f = 0; f < 30; ++f) {
+    const FrameDiagnostics d = rest.sim->advance_frame();
+    if (f >= 10) late_substeps += d.substeps;
+    if (f >= 2) {
+      lowest = std::min(lowest, d.total_energy());
+      worst_rise = std::max(worst_rise, d.total_energy() - lowest);
+    }
+  }
+  const double moved = (rest.sim->state().com_position[1] - start).norm();
+  Bake snap(scene(12.0));
+  int snap_substeps = 0;
+  for (int f = 0; f < 5; ++f) snap_substeps += snap.sim->advance_frame().substeps;
+  std::printf("steel ball on a magnet: %d substeps in the last 20 frames (nominal 200), moved %.4f mm, energy rise "
+              "%.2e J; snapping from 2 mm above: %d substeps in 5 frames (nominal 50)\n",
+              late_substeps, 1e3 * moved, worst_rise, snap_substeps);
+  EXPECT_EQ(late_substeps, 200);
+  EXPECT_LT(moved, 1e-5);
+  EXPECT_LT(worst_rise, 1e-6);
+  EXPECT_GT(snap_substeps, 50);
+}
+
 // The health summary names an energy rise without a source and a body that left the region.
 TEST(Health, NamesEnergyGrowthAndLostBodies) {
   const scene::Scene sc = scene::load_scene_text(
