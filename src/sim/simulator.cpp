@@ -23,6 +23,11 @@ Simulator::Simulator(const scene::Scene& scene, const magnetics::Model& model)
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     stiffness_length_[i] = 0.25 * scene_.bodies[i].shape.shape->bounds().sizes().minCoeff();
   }
+  contact_exempt_.assign(scene_.bodies.size(), 0);
+  for (std::size_t i = 0; i < scene_.bodies.size() && i < model_.body_isotropic.size(); ++i) {
+    contact_exempt_[i] = scene_.bodies[i].motion == scene::Motion::kDynamic && model_.body_isotropic[i];
+    any_contact_exempt_ = any_contact_exempt_ || contact_exempt_[i];
+  }
 }
 
 Simulator::~Simulator() = default;
@@ -87,13 +92,13 @@ int Simulator::substep_split(double h) const {
   // is explicit too. A body with no magnetic torque (a soft sphere, Model::body_isotropic) has
   // no rotational stiffness, and the part of its pull that presses it into a contact is held by
   // that contact, so only the rest of its force (the part that can move it) counts.
-  world_->contact_normals(contact_normals_);
+  if (any_contact_exempt_) world_->contact_normals(contact_normals_);
   int split = 1;
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     const scene::Body& b = scene_.bodies[i];
     if (b.motion != scene::Motion::kDynamic || b.mass <= 0) continue;
     Vec3 free = state_.magnetic_force[i];
-    if (i < model_.body_isotropic.size() && model_.body_isotropic[i]) {
+    if (contact_exempt_[i]) {
       for (const Vec3& n : contact_normals_[i]) {
         const double press = free.dot(n);
         if (press < 0) free -= press * n;

@@ -1,6 +1,7 @@
 // The step loop: magnetics (src/magnetics) and rigid bodies (Bullet) advanced together.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -78,6 +79,8 @@ class Simulator {
   SimState state_;
   int frame_ = 0;
   std::vector<double> stiffness_length_;  // per body, m
+  std::vector<std::uint8_t> contact_exempt_;  // per body: dynamic and without magnetic torque (substep_split)
+  bool any_contact_exempt_ = false;
   mutable std::vector<std::vector<Vec3>> contact_normals_;  // per body, scratch of substep_split()
   std::vector<RigidWorld::Penetration> initial_overlaps_;
   double last_energy_ = 0;  // total energy at the current frame, J (for energy_drift)

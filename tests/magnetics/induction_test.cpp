@@ -115,12 +115,17 @@ TEST(Induction, CoupledSolveCapturesShapeOfAProlateSpheroid) {
               paper.moment[0][2] / exact, coupled.induction.iterations);
 }
 
+// Two steel balls (radius 5 mm, chi 700), both at the origin, built at the given cell size.
+void two_steel_balls(Rig& s, double cell) {
+  s.add(std::make_unique<geometry::SphereShape>(0.005), linear(700));
+  s.add(std::make_unique<geometry::SphereShape>(0.005), linear(700));
+  s.build(cell);
+}
+
 // Two touching soft spheres in a field along their axis attract; side by side they repel.
 TEST(Induction, TouchingSoftSpheresAttractAlongTheField) {
   Rig s;
-  s.add(std::make_unique<geometry::SphereShape>(0.005), linear(700));
-  s.add(std::make_unique<geometry::SphereShape>(0.005), linear(700));
-  s.build(0.001);
+  two_steel_balls(s, 0.001);
   Settings st;
   st.external_field = Vec3(0, 0, 0.01);
   Result r;
@@ -142,9 +147,7 @@ TEST(Induction, TouchingSoftSpheresAttractAlongTheField) {
 // the pull varies with the turn by the discretization error, not by orders of magnitude.
 TEST(Induction, TouchingSteelBallsStayBoundedAtEveryTurn) {
   Rig s;
-  s.add(std::make_unique<geometry::SphereShape>(0.005), linear(700));
-  s.add(std::make_unique<geometry::SphereShape>(0.005), linear(700));
-  s.build(0.0025);
+  two_steel_balls(s, 0.0025);
   Settings st;
   const double B0 = 0.05;
   st.external_field = Vec3(0, 0, B0);
