@@ -9,7 +9,9 @@
 #include <optional>
 
 #include "cli.h"
+#include "cache_export.h"
 #include "field_export.h"
+#include "file_lock.h"
 #include "preview_export.h"
 #include "io/cache.h"
 #include "progress.h"
@@ -59,10 +61,23 @@ fs::path cache_path_for(const scene::Scene& s, const std::string& out_dir) {
 }
 
 int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
-             const Global& g, bool strict) {
+             const Global& g, bool strict, bool allow_absolute) {
   auto loaded = load_or_report(path);
   if (!loaded) return kUsage;
   const scene::Scene& s = *loaded;
+  // Paths from the scene stay inside the output folder unless the user allows absolute ones
+  // (with -o only their file names are used).
+  if (out_dir.empty()) {
+    if (s.cache && check_scene_output_path(*s.cache, allow_absolute, "outputs.cache") != kOk) return kUsage;
+    if (s.field && !s.field->path.empty() &&
+        check_scene_output_path(s.field->path, allow_absolute, "outputs.field.path") != kOk) {
+      return kUsage;
+    }
+    if (s.preview && !s.preview->path.empty() &&
+        check_scene_output_path(s.preview->path, allow_absolute, "outputs.preview.path") != kOk) {
+      return kUsage;
+    }
+  }
 
   int first = s.first_frame, last = s.last_frame;
   if (!frames.empty()) {
@@ -96,6 +111,13 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
     }
     test.close();
     fs::remove(probe, ec);
+  }
+
+  // One writer per cache: a second bake into the same place stops here, before touching anything.
+  const FileLock lock(cache.string() + ".lock");
+  if (!lock.held()) {
+    spdlog::error("cannot bake {}: {}", cache.string(), lock.error());
+    return kFailure;
   }
 
   magnetics::Model model;
@@ -244,6 +266,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
   if (s.field) {
     FieldRequest req;
     req.frames = std::make_pair(first, last);
+    req.allow_absolute = allow_absolute;
     if (!out_dir.empty()) req.pattern = (fs::path(out_dir) / fs::path(s.field->path).filename()).string();
     const int rc = export_field(cache.string(), req, g);
     if (rc != kOk) return rc;
@@ -251,6 +274,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
   if (s.preview) {
     PreviewRequest req;
     req.frames = std::make_pair(first, last);
+    req.allow_absolute = allow_absolute;
     if (!out_dir.empty()) req.pattern = (fs::path(out_dir) / fs::path(s.preview->path).filename()).string();
     const int rc = export_preview(cache.string(), req, g);
     if (rc != kOk) return rc;

@@ -53,8 +53,8 @@ int cmd_info_cache(const std::string& path, bool all_bodies) {
                     a.position[i][1], a.position[i][2], b.position[i][0], b.position[i][1], b.position[i][2]);
       }
       if (shown < n) std::printf("  ... and %zu more (--verbose lists every body)\n", n - shown);
-      const auto mag = io::h5::read_rows(c.file(), "observables/magnetics_seconds/value", 0, c.frame_count());
-      const auto rig = io::h5::read_rows(c.file(), "observables/rigid_seconds/value", 0, c.frame_count());
+      const auto mag = c.observable("magnetics_seconds");
+      const auto rig = c.observable("rigid_seconds");
       double tm = 0, tr = 0;
       for (double x : mag) tm += x;
       for (double x : rig) tr += x;

@@ -3,32 +3,18 @@
 
 #include <spdlog/spdlog.h>
 
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
 #include "cli.h"
+#include "scene/frame_pattern.h"
+#include "scene/load.h"
+#include "scene/output_path.h"
 
 namespace magbake::cli {
 namespace fs = std::filesystem;
 
-std::string expand_pattern(const std::string& pattern, int frame) {
-  const auto h = pattern.find('#');
-  if (h != std::string::npos) {
-    std::size_t n = 0;
-    while (h + n < pattern.size() && pattern[h + n] == '#') ++n;
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%0*d", static_cast<int>(n), frame);
-    return pattern.substr(0, h) + buf + pattern.substr(h + n);
-  }
-  if (pattern.find('%') != std::string::npos) {
-    char buf[4096];
-    std::snprintf(buf, sizeof buf, pattern.c_str(), frame);
-    return buf;
-  }
-  const fs::path p(pattern);
-  return (p.parent_path() / (p.stem().string() + "." + std::to_string(frame) + p.extension().string())).string();
-}
+std::string expand_pattern(const std::string& pattern, int frame) { return scene::expand_frame_pattern(pattern, frame); }
 
 int open_cache_range(const std::string& path, const std::optional<std::pair<int, int>>& frames,
                      std::optional<io::CacheReader>& cache, int& first, int& last) {
@@ -54,7 +40,31 @@ int open_cache_range(const std::string& path, const std::optional<std::pair<int,
   return kOk;
 }
 
+int stored_outputs(const io::CacheReader& cache, bool have_pattern, std::optional<scene::FieldOutput>& field,
+                   std::optional<scene::PreviewOutput>& preview) {
+  const std::string problems = scene::outputs_of_text(cache.scene_text(), field, preview);
+  if (problems.empty()) return kOk;
+  if (have_pattern) {
+    spdlog::warn("{}: the outputs stored with its scene do not validate and are ignored:\n{}", cache.path(), problems);
+    return kOk;
+  }
+  spdlog::error("{}: the outputs stored with its scene do not validate (give -o):\n{}", cache.path(), problems);
+  return kUsage;
+}
+
+int check_scene_output_path(const std::string& path, bool allow_absolute, const char* key) {
+  if (const auto e = scene::output_path_error(path, allow_absolute)) {
+    spdlog::error("{}: {}", key, *e);
+    return kUsage;
+  }
+  return kOk;
+}
+
 int prepare_output_folder(const std::string& pattern, int frame, const char* what) {
+  if (const auto error = scene::frame_pattern_error(pattern)) {
+    spdlog::error("output pattern '{}' for {}: {}", pattern, what, *error);
+    return kUsage;
+  }
   const fs::path out_dir = fs::path(expand_pattern(pattern, frame)).parent_path();
   const fs::path dir = out_dir.empty() ? fs::path(".") : out_dir;
   std::error_code ec;

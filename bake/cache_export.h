@@ -7,11 +7,13 @@
 #include <utility>
 
 #include "io/cache.h"
+#include "scene/scene.h"
 
 namespace magbake::cli {
 
-/// "name.####.ext" (a run of # = the frame zero-padded to that width) or "name.%04d.ext"
-/// (printf) with a frame number; a pattern without either gets ".<frame>" before its extension.
+/// "name.####.ext" (a run of # = the frame zero-padded to that width) or "name.%04d.ext" with a
+/// frame number; a pattern without either gets ".<frame>" before its extension. The pattern must
+/// have passed prepare_output_folder (scene/frame_pattern.h: never a printf format).
 std::string expand_pattern(const std::string& pattern, int frame);
 
 /// Opens a cache and resolves `frames` (inclusive; unset = every frame) against the frames it
@@ -20,8 +22,19 @@ std::string expand_pattern(const std::string& pattern, int frame);
 int open_cache_range(const std::string& path, const std::optional<std::pair<int, int>>& frames,
                      std::optional<io::CacheReader>& cache, int& first, int& last);
 
-/// Creates the folder of the pattern's file for `frame` and checks that it is writable, before
-/// any work is done. Returns kOk, or kUsage after logging why (`what` names the outputs).
+/// The outputs.field / outputs.preview stored in a cache's scene text. When they do not validate
+/// (a pattern or path from a hostile or older scene), they are dropped: with `have_pattern`
+/// (the user gave -o) after a warning, else the call logs why and returns kUsage.
+int stored_outputs(const io::CacheReader& cache, bool have_pattern, std::optional<scene::FieldOutput>& field,
+                   std::optional<scene::PreviewOutput>& preview);
+
+/// kOk, or kUsage after logging why, for an output path or pattern that came from a scene
+/// (scene/output_path.h): absolute ones need `allow_absolute` (--allow-absolute-outputs).
+int check_scene_output_path(const std::string& path, bool allow_absolute, const char* key);
+
+/// Checks the pattern (scene/frame_pattern.h), creates the folder of its file for `frame` and
+/// checks that it is writable, before any work is done. Returns kOk, or kUsage after logging
+/// why (`what` names the outputs).
 int prepare_output_folder(const std::string& pattern, int frame, const char* what);
 
 }  // namespace magbake::cli

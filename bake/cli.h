@@ -42,8 +42,9 @@ std::string scene_summary(const scene::Scene& s, bool all_bodies = false);
 int cmd_check(const std::string& path, double trial_seconds, bool json, const Global& g);
 /// "A-B" or "A" -> a, b.
 bool parse_range(const std::string& text, int& a, int& b);
+/// `bake`: `allow_absolute` lets absolute output paths of the scene be used (scene/output_path.h).
 int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
-             const Global& g, bool strict = false);
+             const Global& g, bool strict = false, bool allow_absolute = false);
 int cmd_info_cache(const std::string& path, bool all_bodies = false);
 int cmd_info(const std::string& path, const Global& g);
 int cmd_eval(const std::string& path, double time, bool json, const Global& g);

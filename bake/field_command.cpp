@@ -22,20 +22,14 @@ namespace {
 
 // Axis-aligned bounds of the magnetic bodies over every frame of the cache (world, m).
 magnetics::Box3 magnetic_bounds(const io::CacheReader& cache, const magnetics::Model& model) {
-  const hid_t f = cache.file();
-  const auto verts = io::h5::read_doubles(f, "geometry/vertices");
-  const auto body = io::h5::read_ints(f, "geometry/submesh_body");
-  const auto vb = io::h5::read_ints(f, "geometry/submesh_vertex_begin");
-  const auto vc = io::h5::read_ints(f, "geometry/submesh_vertex_count");
+  const io::RenderGeometry geo = cache.geometry();
   magnetics::Box3 box;
   for (int i = 0; i < cache.frame_count(); ++i) {
     const io::CacheFrame fr = cache.frame(i);
-    for (std::size_t s = 0; s < body.size(); ++s) {
-      const int b = static_cast<int>(body[s]);
-      if (model.body_root[b] < 0) continue;  // not magnetic
-      for (std::int64_t v = vb[s]; v < vb[s] + vc[s]; ++v) {
-        const Vec3 p(verts[3 * v], verts[3 * v + 1], verts[3 * v + 2]);
-        box.extend(fr.position[b] + fr.orientation[b] * p);
+    for (const io::RenderGeometry::Submesh& s : geo.submeshes) {
+      if (model.body_root[s.body] < 0) continue;  // not magnetic
+      for (std::int64_t v = s.vertex_begin; v < s.vertex_begin + s.vertex_count; ++v) {
+        box.extend(fr.position[s.body] + fr.orientation[s.body] * geo.vertices[v]);
       }
     }
   }
@@ -50,13 +44,16 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
   if (const int rc = open_cache_range(cache_path, req.frames, cache, a, b); rc != kOk) return rc;
   std::optional<scene::FieldOutput> field;
   std::optional<scene::PreviewOutput> preview;
-  scene::outputs_of_text(cache->scene_text(), field, preview);
+  if (const int rc = stored_outputs(*cache, !req.pattern.empty(), field, preview); rc != kOk) return rc;
   const scene::FieldOutput defaults = field.value_or(scene::FieldOutput{});
 
   const int every = req.every.value_or(field ? defaults.every : 1);
 
-  // Output pattern, checked writable before any work.
+  // Output pattern, checked writable before any work. One from the scene stays in the folder.
   std::string pattern = req.pattern.empty() ? (field ? defaults.path : "") : req.pattern;
+  if (req.pattern.empty() && !pattern.empty()) {
+    if (const int rc = check_scene_output_path(pattern, req.allow_absolute, "outputs.field.path"); rc != kOk) return rc;
+  }
   if (pattern.empty()) pattern = (fs::path(cache_path).parent_path() / (fs::path(cache_path).stem().string() + ".####.vdb")).string();
   if (const int rc = prepare_output_folder(pattern, a, "field volumes"); rc != kOk) return rc;
 
@@ -80,20 +77,26 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
     region.max() += Vec3::Constant(margin);
   }
   const double voxel = req.voxel.value_or(field && defaults.voxel ? *defaults.voxel : region.sizes().maxCoeff() / 128.0);
-  if (!(voxel > 0)) {
+  if (!(voxel > 0) || !std::isfinite(voxel)) {
     spdlog::error("the voxel size must be positive");
+    return kUsage;
+  }
+  if (!region.min().allFinite() || !region.max().allFinite() || region.isEmpty()) {
+    spdlog::error("the field region is empty or not finite");
     return kUsage;
   }
   // Voxel centres on multiples of the voxel size (frames and split runs share one lattice).
   const Eigen::Vector3d lo = (region.min() / voxel).array().floor() * voxel;
   const Eigen::Vector3d hi = (region.max() / voxel).array().ceil() * voxel;
-  const Eigen::Vector3i dims = ((hi - lo) / voxel).array().round().cast<int>() + 1;
-  const double nvox = double(dims[0]) * dims[1] * dims[2];
-  if (nvox > double(req.max_voxels)) {
-    spdlog::error("{} x {} x {} voxels ({:.3g}) exceeds the limit of {:.3g}: raise --voxel (now {} m)", dims[0], dims[1],
-                  dims[2], nvox, double(req.max_voxels), voxel);
+  // Counts in floating point first: a tiny voxel must be refused, not overflow an int.
+  const Eigen::Vector3d counts = ((hi - lo) / voxel).array().round() + 1;
+  const double nvox = counts.prod();
+  if (!(nvox <= double(req.max_voxels))) {
+    spdlog::error("{:.3g} x {:.3g} x {:.3g} voxels ({:.3g}) exceeds the limit of {:.3g}: raise --voxel (now {} m)",
+                  counts[0], counts[1], counts[2], nvox, double(req.max_voxels), voxel);
     return kUsage;
   }
+  const Eigen::Vector3i dims = counts.cast<int>();
   const double threshold = req.threshold;
   const std::vector<double> ext = cache->parameter_doubles("external_field");
   const Vec3 applied(ext.at(0), ext.at(1), ext.at(2));

@@ -23,6 +23,7 @@ struct FieldRequest {
   double threshold = 1e-5;                    ///< T: fainter voxels stay inactive
   double theta = 0.25;                        ///< tree opening angle (error bound, see docs)
   double max_voxels = 6e7;                    ///< capacity guard
+  bool allow_absolute = false;                ///< an absolute outputs.field.path may be used
 };
 
 /// B at every voxel centre of `samples` (origin, voxel, dims set): the model placed in `s`

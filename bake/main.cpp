@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -46,8 +47,28 @@ int run_cubes(double gap_mm, double cell_mm, double theta) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  io::h5::no_atexit();
+// Numbers from the command line: finite and within [lo, hi], else false after logging why.
+bool number_ok(const char* option, double v, double lo, double hi) {
+  if (std::isfinite(v) && v >= lo && v <= hi) return true;
+  spdlog::error("{} must be a number from {:g} to {:g}, got {}", option, lo, hi, v);
+  return false;
+}
+
+// Runs a command that reads a cache: what it lets escape is a cache it could not use (its own
+// write failures are caught where they happen), so it is bad input, exit 2.
+template <class Command>
+int cache_reader_command(const std::string& cache, Command command) {
+  try {
+    return command();
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const std::exception& e) {
+    spdlog::error("{}: {}", cache, e.what());
+    return cli::kUsage;
+  }
+}
+
+int run(int argc, char** argv) {
   CLI::App app{"magbake - baker for magnetic rigid-body shots (scene -> HDF5 cache, field volumes, previews)"};
   app.require_subcommand(1);
   app.fallthrough();  // global options (--threads, -q, -v) also work after the subcommand
@@ -69,6 +90,9 @@ int main(int argc, char** argv) {
   bake->add_flag("--resume", resume, "continue an interrupted bake from its last complete frame");
   bool strict = false;
   bake->add_flag("--strict", strict, "exit 1 when the bake ends with warnings (overlaps, energy growth, bodies lost)");
+  bool allow_absolute = false;
+  bake->add_flag("--allow-absolute-outputs", allow_absolute,
+                 "let the scene's absolute output paths be used (by default a scene writes inside the output folder)");
 
   std::string cache_a, cache_b;
   io::DiffOptions diff_options;
@@ -92,6 +116,7 @@ int main(int argc, char** argv) {
   field->add_option("--margin", field_margin, "margin around the magnetic bodies for auto bounds, metres");
   field->add_option("--threshold", field_req.threshold, "voxels with |B| below this (tesla) stay inactive")->capture_default_str();
   field->add_option("--theta", field_req.theta, "tree opening angle (accuracy, see docs)")->capture_default_str();
+  field->add_flag("--allow-absolute-outputs", field_req.allow_absolute, "let an absolute outputs.field.path stored in the cache be used");
 
   std::string preview_cache, preview_frames, preview_size;
   cli::PreviewRequest preview_req;
@@ -105,6 +130,8 @@ int main(int argc, char** argv) {
   preview->add_flag("--no-field-lines", lines_off, "no field lines");
   preview->add_flag("--auto-camera", preview_req.auto_camera, "frame the shot automatically, ignoring the scene's camera");
   preview->add_option("--contact-sheet", preview_req.contact_sheet, "also write all frames tiled into this PNG");
+  preview->add_flag("--allow-absolute-outputs", preview_req.allow_absolute,
+                    "let an absolute outputs.preview.path stored in the cache be used");
 
   auto* check = app.add_subcommand("check", "validate a scene and print a one-screen summary with its cost (exit 0/2)");
   check->add_option("scene", scene_path, "scene file (YAML)")->required();
@@ -152,6 +179,27 @@ int main(int argc, char** argv) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, g.threads);
   }
 
+  // Every number given on the command line, before any work (DESIGN.md exit 2).
+  if (g.threads < 0 || g.threads > 4096) {
+    spdlog::error("--threads must be from 0 (all cores) to 4096, got {}", g.threads);
+    return cli::kUsage;
+  }
+  if (*diff && !(number_ok("--atol", diff_options.atol, 0, 1e30) && number_ok("--rtol", diff_options.rtol, 0, 1e30) &&
+                 number_ok("--angle-tol", diff_options.angle_tol, 0, 10))) {
+    return cli::kUsage;
+  }
+  if ((*eval || *probe) && !number_ok("--time", time, -1e9, 1e9)) return cli::kUsage;
+  if (*field) {
+    if (field->count("--voxel") && !number_ok("--voxel", field_voxel, 1e-7, 1e4)) return cli::kUsage;
+    if (field->count("--margin") && !number_ok("--margin", field_margin, 0, 1e4)) return cli::kUsage;
+    if (!number_ok("--threshold", field_req.threshold, 0, 1e6) || !number_ok("--theta", field_req.theta, 0, 1)) {
+      return cli::kUsage;
+    }
+  }
+  if (*cubes && !(number_ok("--gap", gap, 0, 1e4) && number_ok("--cell", cell, 0.01, 1e4) && number_ok("--theta", theta, 0, 1))) {
+    return cli::kUsage;
+  }
+
   // --frames A-B of the cache readers: unset when empty; false (after logging) when malformed.
   auto frames_option = [](const std::string& text, std::optional<std::pair<int, int>>& out) {
     if (text.empty()) return true;
@@ -169,29 +217,42 @@ int main(int argc, char** argv) {
     if (field_margin >= 0) field_req.margin = field_margin;
     if (!field_bounds.empty()) {
       double v[6];
-      if (std::sscanf(field_bounds.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf", v, v + 1, v + 2, v + 3, v + 4, v + 5) != 6 ||
-          !(v[0] < v[3] && v[1] < v[4] && v[2] < v[5])) {
-        spdlog::error("--bounds expects xmin,ymin,zmin,xmax,ymax,zmax with min < max, got '{}'", field_bounds);
+      int used = 0;
+      const bool parsed = std::sscanf(field_bounds.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf%n", v, v + 1, v + 2, v + 3, v + 4,
+                                      v + 5, &used) == 6 &&
+                          used == static_cast<int>(field_bounds.size());
+      bool finite = parsed;
+      for (int k = 0; parsed && k < 6; ++k) finite = finite && std::isfinite(v[k]) && std::abs(v[k]) <= 1e6;
+      if (!finite || !(v[0] < v[3] && v[1] < v[4] && v[2] < v[5])) {
+        spdlog::error("--bounds expects xmin,ymin,zmin,xmax,ymax,zmax in metres (finite, within 1e6, min < max), got '{}'",
+                      field_bounds);
         return cli::kUsage;
       }
       field_req.bounds = magnetics::Box3(magnetics::Vec3(v[0], v[1], v[2]), magnetics::Vec3(v[3], v[4], v[5]));
     }
     cli::install_interrupt_handlers();
-    return cli::export_field(field_cache, field_req, g);
+    return cache_reader_command(field_cache, [&] { return cli::export_field(field_cache, field_req, g); });
   }
   if (*preview) {
     if (!frames_option(preview_frames, preview_req.frames)) return cli::kUsage;
+    int used = 0;
     if (!preview_size.empty() &&
-        std::sscanf(preview_size.c_str(), "%dx%d", &preview_req.width, &preview_req.height) != 2) {
+        (std::sscanf(preview_size.c_str(), "%dx%d%n", &preview_req.width, &preview_req.height, &used) != 2 ||
+         used != static_cast<int>(preview_size.size()))) {
       spdlog::error("--size expects WxH, got '{}'", preview_size);
+      return cli::kUsage;
+    }
+    if (!preview_size.empty() && !(preview_req.width >= 16 && preview_req.width <= 8192 && preview_req.height >= 16 &&
+                                   preview_req.height <= 8192)) {
+      spdlog::error("--size must be between 16x16 and 8192x8192, got '{}'", preview_size);
       return cli::kUsage;
     }
     if (lines_on) preview_req.field_lines = true;
     if (lines_off) preview_req.field_lines = false;
     cli::install_interrupt_handlers();
-    return cli::export_preview(preview_cache, preview_req, g);
+    return cache_reader_command(preview_cache, [&] { return cli::export_preview(preview_cache, preview_req, g); });
   }
-  if (*bake) return cli::cmd_bake(scene_path, out_dir, frames, resume, g, strict);
+  if (*bake) return cli::cmd_bake(scene_path, out_dir, frames, resume, g, strict, allow_absolute);
   if (*diff) return cli::cmd_diff(cache_a, cache_b, diff_options, g);
   if (*check) return cli::cmd_check(scene_path, trial_seconds, json, g);
   if (*info) return cli::cmd_info(scene_path, g);
@@ -199,4 +260,19 @@ int main(int argc, char** argv) {
   if (*probe) return cli::cmd_probe(scene_path, at, points_file, time, json, g);
   if (*cubes) return run_cubes(gap, cell, theta);
   return cli::kUsage;
+}
+
+int main(int argc, char** argv) {
+  io::h5::no_atexit();
+  // No exception leaves main: whatever a command did not catch is reported in one line.
+  try {
+    return run(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "magbake: error: out of memory\n");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "magbake: error: %s\n", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "magbake: error: unknown failure\n");
+  }
+  return cli::kFailure;
 }

@@ -49,43 +49,35 @@ struct ShotGeometry {
 };
 
 ShotGeometry load_geometry(const io::CacheReader& cache) {
-  const hid_t f = cache.file();
-  const auto verts = io::h5::read_doubles(f, "geometry/vertices");
-  const auto tris = io::h5::read_ints(f, "geometry/triangles");
-  const auto body = io::h5::read_ints(f, "geometry/submesh_body");
-  const auto vb = io::h5::read_ints(f, "geometry/submesh_vertex_begin");
-  const auto vc = io::h5::read_ints(f, "geometry/submesh_vertex_count");
-  const auto tb = io::h5::read_ints(f, "geometry/submesh_triangle_begin");
-  const auto tc = io::h5::read_ints(f, "geometry/submesh_triangle_count");
-  const auto kind = io::h5::read_strings(f, "geometry/submesh_material_kind");
-  const auto mag = io::h5::read_doubles(f, "geometry/submesh_magnetization");
-  const auto role = io::h5::read_strings(f, "geometry/submesh_role");
+  const io::RenderGeometry geo = cache.geometry();
   // A body with inserts is drawn as a translucent casing so its magnets show through.
   std::vector<bool> has_parts(cache.body_names().size(), false);
-  for (std::size_t s = 0; s < body.size(); ++s) {
-    if (role[s] == "part") has_parts[body[s]] = true;
+  for (const auto& s : geo.submeshes) {
+    if (s.role == "part") has_parts[s.body] = true;
   }
   ShotGeometry g;
   g.body_points.resize(cache.body_names().size());
-  auto vertex = [&](std::int64_t v) { return Vec3(verts[3 * v], verts[3 * v + 1], verts[3 * v + 2]); };
-  for (std::size_t s = 0; s < body.size(); ++s) {
+  auto vertex = [&](std::int64_t v) { return geo.vertices[v]; };
+  for (const io::RenderGeometry::Submesh& sub : geo.submeshes) {
     render::Mesh m;
-    m.body = static_cast<int>(body[s]);
-    if (role[s] == "body" && has_parts[m.body] && kind[s] == "none") m.alpha = 0.35f;
+    m.body = sub.body;
+    if (sub.role == "body" && has_parts[m.body] && sub.material_kind == "none") m.alpha = 0.35f;
     Vec3 centre = Vec3::Zero();
-    for (std::int64_t v = vb[s]; v < vb[s] + vc[s]; ++v) {
+    for (std::int64_t v = sub.vertex_begin; v < sub.vertex_begin + sub.vertex_count; ++v) {
       centre += vertex(v);
       g.body_points[m.body].push_back(vertex(v));
     }
-    centre /= double(std::max<std::int64_t>(vc[s], 1));
-    const Vec3 dir(mag[3 * s], mag[3 * s + 1], mag[3 * s + 2]);
+    centre /= double(std::max<std::int64_t>(sub.vertex_count, 1));
+    const Vec3 dir = sub.magnetization;
+    const std::string& kind = sub.material_kind;
     auto emit = [&](const Vec3& a, const Vec3& b, const Vec3& c, bool north) {
-      const Vec3f col = material_color(kind[s], north);
+      const Vec3f col = material_color(kind, north);
       for (const Vec3& p : {a, b, c}) m.positions.push_back(p.cast<float>()), m.colors.push_back(col);
     };
-    for (std::int64_t t = tb[s]; t < tb[s] + tc[s]; ++t) {
-      const Vec3 p[3] = {vertex(tris[3 * t]), vertex(tris[3 * t + 1]), vertex(tris[3 * t + 2])};
-      if (kind[s] != "permanent") {
+    for (std::int64_t t = sub.triangle_begin; t < sub.triangle_begin + sub.triangle_count; ++t) {
+      const auto& tri = geo.triangles[t];
+      const Vec3 p[3] = {vertex(tri[0]), vertex(tri[1]), vertex(tri[2])};
+      if (kind != "permanent") {
         emit(p[0], p[1], p[2], true);
         continue;
       }
@@ -244,7 +236,7 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
   if (const int rc = open_cache_range(cache_path, req.frames, cache, a, b); rc != kOk) return rc;
   std::optional<scene::FieldOutput> field_out;
   std::optional<scene::PreviewOutput> scene_preview;
-  scene::outputs_of_text(cache->scene_text(), field_out, scene_preview);
+  if (const int rc = stored_outputs(*cache, !req.pattern.empty(), field_out, scene_preview); rc != kOk) return rc;
   const scene::PreviewOutput defaults = scene_preview.value_or(scene::PreviewOutput{});
   const int width = req.width > 0 ? req.width : defaults.width, height = req.height > 0 ? req.height : defaults.height;
   if (width < 16 || height < 16 || width > 8192 || height > 8192) {
@@ -253,6 +245,9 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
   }
   const bool with_lines = req.field_lines.value_or(defaults.field_lines);
   std::string pattern = !req.pattern.empty() ? req.pattern : (scene_preview ? defaults.path : "");
+  if (req.pattern.empty() && !pattern.empty()) {
+    if (const int rc = check_scene_output_path(pattern, req.allow_absolute, "outputs.preview.path"); rc != kOk) return rc;
+  }
   if (pattern.empty()) {
     pattern = (fs::path(cache_path).parent_path() / (fs::path(cache_path).stem().string() + ".preview.####.png")).string();
   }

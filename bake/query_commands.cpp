@@ -215,6 +215,11 @@ int cmd_probe(const std::string& path, const std::vector<std::string>& at, const
     pts.push_back(p);
   }
   if (!points_file.empty()) {
+    std::error_code ec;
+    if (std::filesystem::exists(points_file, ec) && !std::filesystem::is_regular_file(points_file, ec)) {
+      std::cerr << "magbake probe: points file '" << points_file << "' is not a regular file\n";
+      return kUsage;
+    }
     std::ifstream in(points_file);
     if (!in) {
       std::cerr << "magbake probe: cannot read points file '" << points_file << "'\n";

@@ -35,8 +35,10 @@ void write_png(const std::string& path, const std::vector<std::uint8_t>& rgba, i
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  const bool ok = std::fflush(f) == 0;
-  std::fclose(f);
+  // Every byte must have reached the file: a short write (disk full, quota, file size limit)
+  // shows in the stream's error flag, the flush or the close.
+  bool ok = std::fflush(f) == 0 && !std::ferror(f);
+  ok = (std::fclose(f) == 0) && ok;
   std::error_code ec;
   if (!ok) {
     std::filesystem::remove(tmp, ec);

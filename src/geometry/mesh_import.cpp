@@ -1,5 +1,7 @@
 #include "mesh_import.h"
 
+#include <filesystem>
+
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -9,6 +11,14 @@
 namespace magbake::geometry {
 
 TriangleSoup load_triangles(const std::string& path, double scale) {
+  // Only regular files of a sane size: a FIFO or device would block or never end.
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) throw std::runtime_error("cannot read mesh '" + path + "': no such file");
+  if (!std::filesystem::is_regular_file(status)) throw std::runtime_error("cannot read mesh '" + path + "': not a regular file");
+  if (std::filesystem::file_size(path, ec) > kMaxMeshFileBytes) {
+    throw std::runtime_error("cannot read mesh '" + path + "': larger than 2 GiB");
+  }
   Assimp::Importer importer;
   // Triangulate polygons and merge duplicated vertices; keep the file's coordinates as they are
   // (no normal generation, no re-centring). Node transforms are applied (PreTransformVertices).

@@ -1,7 +1,9 @@
 #include "cache.h"
 
+#include <cmath>
 #include <filesystem>
 
+#include "cache_layout.h"
 #include "geometry/shapes.h"
 
 namespace magbake::io {
@@ -367,9 +369,8 @@ void CacheWriter::close() {
   impl_->body_series.clear();
   impl_->observables.clear();
   impl_->step.reset(), impl_->time.reset(), impl_->induced.reset(), impl_->frames_done.reset(), impl_->status.reset();
-  const herr_t st = H5Fclose(impl_->file.id());
-  // (Handle would close again: release it first.)
-  impl_->file = Handle();
+  // Closed once, by hand, so a failure (disk full) is reported; the handle never closes it again.
+  const herr_t st = H5Fclose(impl_->file.release());
   h5::check(st, "close cache");
 }
 
@@ -395,17 +396,19 @@ CacheReader::CacheReader(const std::string& path) : path_(path), impl_(std::make
     if (H5Aexists(f, "format") <= 0 || h5::read_attr_string(f, "format") != kFormat) {
       throw std::runtime_error("not a magbake cache (no format = \"magbake-cache\" attribute)");
     }
+    const std::vector<std::int64_t> done = h5::read_ints(f, "bake/frames_done");
+    const std::vector<std::int64_t> status = h5::read_ints(f, "bake/status");
+    if (done.empty() || status.empty()) throw std::runtime_error("/bake/frames_done or /bake/status is empty");
+    if (status[0] < 0 || status[0] > 3) throw std::runtime_error("unknown /bake/status " + std::to_string(status[0]));
+    status_ = static_cast<BakeStatus>(status[0]);
+    // Every dataset the readers use, with its shape, index ranges and finite constants; never
+    // more frames than every series holds.
+    layout_ = check_cache_layout(f, done[0]);
+    frames_ = layout_.frames;
     Handle p(h5::check_id(H5Gopen2(f, "parameters", H5P_DEFAULT), "parameters"));
     fps_ = h5::read_attr_doubles(p.id(), "fps").at(0);
     first_frame_ = static_cast<int>(h5::read_attr_doubles(p.id(), "first_frame").at(0));
     names_ = h5::read_strings(f, "bodies/name");
-    frames_ = static_cast<int>(h5::read_ints(f, "bake/frames_done").at(0));
-    status_ = static_cast<BakeStatus>(h5::read_ints(f, "bake/status").at(0));
-    // Never trust more frames than every series holds.
-    for (const char* ds : {"frames/step", "particles/bodies/position/value"}) {
-      Handle d(h5::check_id(H5Dopen2(f, ds, H5P_DEFAULT), ds));
-      frames_ = std::min<int>(frames_, static_cast<int>(h5::shape(d.id()).at(0)));
-    }
   } catch (const std::exception& e) {
     throw std::runtime_error(path + ": " + e.what());
   }
@@ -454,9 +457,26 @@ CacheFrame CacheReader::frame(int index) const {
   fr.torque = vecs("magnetic_torque");
   const std::vector<double> q = h5::read_rows(f, "particles/bodies/orientation/value", index, 1);
   for (std::size_t i = 0; i + 3 < q.size(); i += 4) fr.orientation.emplace_back(q[i], q[i + 1], q[i + 2], q[i + 3]);
-  if (h5::exists(f, "magnetics/induced_moment/value")) {
+  if (layout_.induced > 0) {
     const std::vector<double> v = h5::read_rows(f, "magnetics/induced_moment/value", index, 1);
     for (std::size_t i = 0; i + 2 < v.size(); i += 3) fr.induced_moment.emplace_back(v[i], v[i + 1], v[i + 2]);
+  } else {
+    fr.induced_moment.clear();
+  }
+  // A frame that readers would turn into nonsense (NaN poses, a zero quaternion) is refused.
+  auto bad = [&](const std::string& what, std::size_t i) {
+    return std::runtime_error(path_ + ": frame " + std::to_string(fr.frame) + " holds a non-finite or invalid " + what +
+                              (i < names_.size() ? " of body '" + names_[i] + "'" : " (row " + std::to_string(i) + ")"));
+  };
+  if (!std::isfinite(fr.time)) throw bad("time", names_.size());
+  for (std::size_t i = 0; i < fr.position.size(); ++i) {
+    if (!fr.position[i].allFinite()) throw bad("position", i);
+    if (!fr.orientation[i].coeffs().allFinite() || fr.orientation[i].squaredNorm() < 1e-12) throw bad("orientation", i);
+    if (!fr.velocity[i].allFinite() || !fr.angular_velocity[i].allFinite()) throw bad("velocity", i);
+    if (!fr.force[i].allFinite() || !fr.torque[i].allFinite()) throw bad("force or torque", i);
+  }
+  for (std::size_t k = 0; k < fr.induced_moment.size(); ++k) {
+    if (!fr.induced_moment[k].allFinite()) throw bad("induced moment", names_.size() + k);
   }
   return fr;
 }
@@ -477,6 +497,35 @@ sim::SimState CacheReader::sim_state(int index, const scene::Scene& sc) const {
   }
   s.induced_moment = fr.induced_moment;
   return s;
+}
+
+RenderGeometry CacheReader::geometry() const {
+  const hid_t f = file();
+  RenderGeometry g;
+  const std::vector<double> v = h5::read_doubles(f, "geometry/vertices");
+  for (std::size_t i = 0; i + 2 < v.size(); i += 3) g.vertices.emplace_back(v[i], v[i + 1], v[i + 2]);
+  const std::vector<std::int64_t> t = h5::read_ints(f, "geometry/triangles");
+  for (std::size_t i = 0; i + 2 < t.size(); i += 3) g.triangles.push_back({t[i], t[i + 1], t[i + 2]});
+  const auto body = h5::read_ints(f, "geometry/submesh_body");
+  const auto vb = h5::read_ints(f, "geometry/submesh_vertex_begin"), vc = h5::read_ints(f, "geometry/submesh_vertex_count");
+  const auto tb = h5::read_ints(f, "geometry/submesh_triangle_begin"), tc = h5::read_ints(f, "geometry/submesh_triangle_count");
+  const auto role = h5::read_strings(f, "geometry/submesh_role");
+  const auto kind = h5::read_strings(f, "geometry/submesh_material_kind");
+  const auto mag = h5::read_doubles(f, "geometry/submesh_magnetization");
+  for (std::size_t s = 0; s < body.size(); ++s) {
+    g.submeshes.push_back(RenderGeometry::Submesh{static_cast<int>(body[s]), vb[s], vc[s], tb[s], tc[s], role[s], kind[s],
+                                                  Vec3(mag[3 * s], mag[3 * s + 1], mag[3 * s + 2])});
+  }
+  return g;
+}
+
+std::vector<double> CacheReader::observable(const std::string& name) const {
+  const std::string path = "observables/" + name + "/value";
+  if (frames_ == 0 || !h5::exists(file(), path)) return {};
+  h5::Handle d(h5::check_id(H5Dopen2(file(), path.c_str(), H5P_DEFAULT), "open " + path));
+  const std::vector<hsize_t> shape = h5::shape(d.id());
+  if (shape.size() != 1 || shape[0] < hsize_t(frames_)) return {};
+  return h5::read_rows(file(), path, 0, frames_);
 }
 
 magnetics::Model CacheReader::model(std::vector<int>* induced_order) const {

@@ -3,10 +3,12 @@
 // read back by diff, info, field export, previews and --resume.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "cache_layout.h"
 #include "h5.h"
 #include "magnetics/model.h"
 #include "scene/scene.h"
@@ -56,7 +58,25 @@ struct CacheFrame {
   std::vector<Vec3> induced_moment;    ///< world, A·m², Model::induced_cells order
 };
 
-/// Reads a cache written by magbake (also one left behind by a crash).
+/// The render geometry of a cache: every body's shape and parts as triangle meshes in the body
+/// frame (m). Indices are checked at open: triangles index `vertices`, submesh ranges lie inside.
+struct RenderGeometry {
+  struct Submesh {
+    int body = 0;                          ///< body index
+    std::int64_t vertex_begin = 0, vertex_count = 0;
+    std::int64_t triangle_begin = 0, triangle_count = 0;
+    std::string role;                      ///< "body" or "part"
+    std::string material_kind;             ///< permanent | soft | linear | superconductor | none
+    Vec3 magnetization = Vec3::Zero();     ///< unit direction (permanent), body frame
+  };
+  std::vector<Vec3> vertices;
+  std::vector<std::array<std::int64_t, 3>> triangles;
+  std::vector<Submesh> submeshes;
+};
+
+/// Reads a cache written by magbake (also one left behind by a crash). The constructor checks
+/// the whole layout (cache_layout.h): a reader never indexes outside what the file holds, and
+/// frame() refuses frames with non-finite or invalid poses.
 class CacheReader {
  public:
   /// Opens `path`; throws std::runtime_error naming the problem for a missing, unreadable,
@@ -75,6 +95,10 @@ class CacheReader {
   std::string attribute(const std::string& name) const;  ///< a /parameters string attribute
   std::vector<double> parameter_doubles(const std::string& name) const;  ///< a /parameters numeric attribute
   std::vector<Vec3> centers_of_mass() const;             ///< body frame
+  RenderGeometry geometry() const;
+  /// A scalar per-frame observable (e.g. "magnetics_seconds") over the completed frames; empty
+  /// when the cache does not hold it.
+  std::vector<double> observable(const std::string& name) const;
 
   CacheFrame frame(int index) const;                   ///< 0-based index of a completed frame
   /// The simulation state of a stored frame (for --resume), given the scene's bodies.
@@ -94,6 +118,7 @@ class CacheReader {
   double fps_ = 0;
   BakeStatus status_ = BakeStatus::kRunning;
   std::vector<std::string> names_;
+  CacheLayout layout_;
 };
 
 }  // namespace magbake::io

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 
 namespace magbake::io {
@@ -47,13 +48,24 @@ DiffReport diff_caches(const CacheReader& a, const CacheReader& b, const DiffOpt
       return;
     }
     std::map<std::size_t, Deviation> dev;  // by group
+    bool nonfinite_noted = false;
     for (int f = 0; f < frames; ++f) {
       for (std::size_t g = 0; g < groups; ++g) {
         const double* x = va.data() + (f * groups + g) * comp;
         const double* y = vb.data() + (f * groups + g) * comp;
         double err = 0;
         bool bad = false;
-        if (o.exact) {
+        bool finite = true;
+        for (std::size_t c = 0; c < comp; ++c) finite = finite && std::isfinite(x[c]) && std::isfinite(y[c]);
+        if (!finite) {
+          // NaN or Inf is never "the same", not even bit for bit: such a cache is broken.
+          bad = true;
+          err = std::numeric_limits<double>::infinity();
+          if (!nonfinite_noted) {
+            r.notes.push_back(path + " holds non-finite values (NaN or Inf) at frame " + std::to_string(a.first_frame() + f));
+            nonfinite_noted = true;
+          }
+        } else if (o.exact) {
           bad = std::memcmp(x, y, comp * sizeof(double)) != 0;
           for (std::size_t c = 0; c < comp; ++c) err = std::max(err, std::abs(x[c] - y[c]));
         } else if (orientation) {

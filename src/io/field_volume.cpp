@@ -78,6 +78,14 @@ std::size_t write_field_volume(const std::string& path, const FieldSamples& s, c
     file.setCompression(openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK);
     file.write(grids, file_meta);
     file.close();
+    // OpenVDB writes through a std::ofstream whose failures it does not check (a full disk gives
+    // a truncated file and no error): read the whole file back before it gets its final name.
+    openvdb::io::File check(tmp);
+    check.open(false);
+    for (const char* name : {"B", "density"}) {
+      if (!check.hasGrid(name) || !check.readGrid(name)) throw std::runtime_error(std::string("grid ") + name + " did not read back");
+    }
+    check.close();
   } catch (const std::exception& e) {
     std::error_code ec;
     std::filesystem::remove(tmp, ec);

@@ -189,11 +189,22 @@ std::vector<hsize_t> shape(hid_t dataset) {
 }
 
 namespace {
+// Elements in a dataset of `dims`; throws for more than a reader will ever hold (a corrupt or
+// hostile file declaring a huge extent must not exhaust memory).
+hsize_t element_count(const std::vector<hsize_t>& dims, std::size_t element_size, const std::string& path) {
+  constexpr hsize_t kMaxBytes = hsize_t(1) << 33;  // 8 GiB
+  hsize_t total = 1;
+  for (hsize_t s : dims) {
+    if (s != 0 && total > kMaxBytes / element_size / s) throw Error(path + ": dataset too large to read");
+    total *= s;
+  }
+  return total;
+}
+
 template <class T>
 std::vector<T> read_all(hid_t parent, const std::string& path, hid_t mem_type) {
   Handle d(check_id(H5Dopen2(parent, path.c_str(), H5P_DEFAULT), "open " + path));
-  hsize_t total = 1;
-  for (hsize_t s : shape(d.id())) total *= s;
+  const hsize_t total = element_count(shape(d.id()), sizeof(T), path);
   std::vector<T> out(total);
   if (total) check(H5Dread(d.id(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()), "read " + path);
   return out;
@@ -212,7 +223,8 @@ std::vector<std::string> read_strings(hid_t parent, const std::string& path) {
   Handle type(H5Dget_type(d.id()));
   if (H5Tget_class(type.id()) != H5T_STRING || H5Tis_variable_str(type.id()) > 0) throw Error(path + ": not fixed strings");
   const std::size_t len = H5Tget_size(type.id());
-  const hsize_t n = shape(d.id()).empty() ? 1 : shape(d.id())[0];
+  if (len == 0) throw Error(path + ": zero-length strings");
+  const hsize_t n = element_count(shape(d.id()), len, path);  // every element (any rank)
   std::vector<char> buf(n * len);
   if (n) check(H5Dread(d.id(), type.id(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()), "read " + path);
   std::vector<std::string> out;
@@ -223,12 +235,11 @@ std::vector<std::string> read_strings(hid_t parent, const std::string& path) {
 std::vector<double> read_rows(hid_t parent, const std::string& path, hsize_t first, hsize_t count) {
   Handle d(check_id(H5Dopen2(parent, path.c_str(), H5P_DEFAULT), "open " + path));
   std::vector<hsize_t> dims = shape(d.id());
-  if (dims.empty() || first + count > dims[0]) throw Error(path + ": rows out of range");
+  if (dims.empty() || first > dims[0] || count > dims[0] - first) throw Error(path + ": rows out of range");
   std::vector<hsize_t> start(dims.size(), 0), cnt = dims;
   start[0] = first;
   cnt[0] = count;
-  hsize_t total = 1;
-  for (hsize_t c : cnt) total *= c;
+  const hsize_t total = element_count(cnt, sizeof(double), path);
   std::vector<double> out(total);
   if (!total) return out;
   Handle fs(H5Dget_space(d.id()));
@@ -242,6 +253,10 @@ std::string read_attr_string(hid_t obj, const std::string& name) {
   Handle a(check_id(H5Aopen(obj, name.c_str(), H5P_DEFAULT), "attribute " + name));
   Handle type(H5Aget_type(a.id()));
   if (H5Tget_class(type.id()) != H5T_STRING) throw Error("attribute " + name + " is not a string");
+  {
+    Handle space(H5Aget_space(a.id()));
+    if (H5Sget_simple_extent_npoints(space.id()) != 1) throw Error("attribute " + name + " is not a single string");
+  }
   if (H5Tis_variable_str(type.id()) > 0) {
     char* s = nullptr;
     Handle mt(H5Tcopy(H5T_C_S1));
@@ -261,6 +276,7 @@ std::vector<double> read_attr_doubles(hid_t obj, const std::string& name) {
   Handle a(check_id(H5Aopen(obj, name.c_str(), H5P_DEFAULT), "attribute " + name));
   Handle s(H5Aget_space(a.id()));
   const hssize_t n = H5Sget_simple_extent_npoints(s.id());
+  if (n > (hssize_t(1) << 24)) throw Error("attribute " + name + " is too large");
   std::vector<double> out(std::max<hssize_t>(n, 0));
   check(H5Aread(a.id(), H5T_NATIVE_DOUBLE, out.data()), "read attribute " + name);
   return out;

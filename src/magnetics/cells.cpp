@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -28,16 +29,21 @@ struct PartCells {
 PartCells decompose(const Solid& solid, double cell_size, const BuildSettings& s, std::int64_t budget) {
   const Box3 box = solid.bounds();
   const Vec3 size = box.sizes();
-  Eigen::Vector3i n;
+  // Cell counts in floating point first: a cell size far below the part's size must give a clear
+  // error, not an integer overflow (which once wrapped to "one cell").
+  double counts[3], product = 1;
   for (int a = 0; a < 3; ++a) {
-    n[a] = std::max(1, static_cast<int>(std::ceil(size[a] / cell_size - 1e-9)));
+    counts[a] = std::max(1.0, std::ceil(size[a] / cell_size - 1e-9));
+    product *= counts[a];
   }
+  if (!(product <= double(budget))) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.3g", product);
+    throw std::runtime_error(std::string("magnetics: a part needs ") + buf + " grid cells, more than the limit of " +
+                             std::to_string(budget) + "; raise magnetics.cell_size");
+  }
+  const Eigen::Vector3i n(static_cast<int>(counts[0]), static_cast<int>(counts[1]), static_cast<int>(counts[2]));
   const std::int64_t total = std::int64_t(n[0]) * n[1] * n[2];
-  if (total > budget) {
-    throw std::runtime_error("magnetics: a part needs " + std::to_string(total) +
-                             " grid cells, more than the limit of " + std::to_string(budget) +
-                             "; raise magnetics.cell_size");
-  }
   const Vec3 e = size.cwiseQuotient(n.cast<double>());
   const double cell_volume = e.prod();
   const Vec3 lo = box.min();

@@ -20,8 +20,11 @@ Scene load_scene(const std::string& path);
 Scene load_scene_text(const std::string& text, const std::string& file);
 
 /// outputs.field and outputs.preview of a scene's text, in SI units, without validating the rest
-/// (meshes are not loaded): what `magbake field` and `preview` read from a cache.
-void outputs_of_text(const std::string& text, std::optional<FieldOutput>& field, std::optional<PreviewOutput>& preview);
+/// (meshes are not loaded): what `magbake field` and `preview` read from a cache. Returns ""
+/// or, when those outputs do not validate (a bad pattern or path stored in a cache), the
+/// problems; both outputs are then unset.
+std::string outputs_of_text(const std::string& text, std::optional<FieldOutput>& field,
+                            std::optional<PreviewOutput>& preview);
 
 /// Hex SHA-256 of a byte string.
 std::string sha256_hex(const std::string& bytes);

@@ -3,6 +3,7 @@
 // (yaml-cpp accepts them silently).
 #include <yaml-cpp/yaml.h>
 
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -419,6 +420,17 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
 }
 
 SceneSpec parse_scene_file(const std::string& path, Diagnostics& d) {
+  // A FIFO or device would block or never end; a scene is a small regular file.
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (!ec && std::filesystem::exists(status) &&
+      (!std::filesystem::is_regular_file(status) || std::filesystem::file_size(path, ec) > (64u << 20))) {
+    d.add({}, "", std::filesystem::is_regular_file(status) ? "the scene file is larger than 64 MiB"
+                                                           : "the scene file is not a regular file");
+    SceneSpec s;
+    s.file = path;
+    return s;
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     d.add({}, "", "cannot read the scene file");

@@ -9,6 +9,8 @@
 #include <numbers>
 #include <set>
 
+#include "frame_pattern.h"
+#include "output_path.h"
 #include "geometry/mesh_import.h"
 #include "load.h"
 #include "scene_magnetics.h"
@@ -49,6 +51,54 @@ bool positive(Ctx& c, const Val<double>& v, const std::string& path, const char*
   if (!v.set) return false;
   if (!(v.v > 0) || !std::isfinite(v.v)) {
     c.d.add(v.loc, path, std::string("must be a positive ") + what + ", got " + std::to_string(v.v));
+    return false;
+  }
+  return true;
+}
+
+// Magnitude limits (SI, after unit conversion) far beyond any shot but small enough that no
+// count, product or force computed from them overflows: a hostile or mistyped number (1e308 T,
+// a 1e30 m box) is an error at its file:line:col, not NaN moments or a wrapped integer later.
+constexpr double kMaxLength = 1e4;          // m: sizes, cell size, voxel, margin
+constexpr double kMinLength = 1e-7;         // m: 0.1 um, the smallest size or cell
+constexpr double kMaxCoordinate = 1e6;      // m: positions, bounds
+constexpr double kMaxSpeed = 1e5;           // m/s
+constexpr double kMaxSpin = 1e6;            // rad/s
+constexpr double kMaxAcceleration = 1e4;    // m/s² (gravity)
+constexpr double kMaxFieldTesla = 100;      // T: external field, remanence
+constexpr double kMaxSusceptibility = 1e7;
+constexpr double kMaxDensity = 1e6;         // kg/m³
+constexpr double kMaxFrame = 1e8;           // |frame number|
+constexpr double kMaxFrames = 1e6;          // frames in one shot
+constexpr double kMaxStepsPerFrame = 1e6;   // physics substeps between two frames
+
+// |v| (scaled to SI by `scale`) <= `limit`, else a diagnostic; true when within.
+bool within(Ctx& c, const Val<double>& v, const std::string& path, double limit, double scale, const char* unit) {
+  if (!v.set || std::abs(v.v * scale) <= limit) return true;
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "out of range: at most %g %s in magnitude, got %g %s", limit, unit, v.v * scale, unit);
+  c.d.add(v.loc, path, buf);
+  return false;
+}
+bool within(Ctx& c, const Val<Vec>& v, const std::string& path, double limit, double scale, const char* unit) {
+  if (!v.set) return true;
+  for (double x : v.v) {
+    if (!(std::abs(x * scale) <= limit)) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "out of range: every component at most %g %s in magnitude, got %g %s", limit, unit,
+                    x * scale, unit);
+      c.d.add(v.loc, path, buf);
+      return false;
+    }
+  }
+  return true;
+}
+// A positive length (scaled to m) between kMinLength and kMaxLength.
+bool length(Ctx& c, const Val<double>& v, const std::string& path) {
+  if (!positive(c, v, path)) return false;
+  if (!within(c, v, path, kMaxLength, c.L, "m")) return false;
+  if (v.v * c.L < kMinLength) {
+    c.d.add(v.loc, path, "too small: at least " + std::to_string(kMinLength).substr(0, 8) + " m (0.1 um)");
     return false;
   }
   return true;
@@ -104,23 +154,27 @@ ShapeDesc shape(Ctx& c, const ShapeSpec& s, const std::string& path) {
         c.d.add(s.size.loc, kp, "box edges must be positive lengths");
         return out;
       }
+      if (!(x * c.L <= kMaxLength && x * c.L >= kMinLength)) {
+        c.d.add(s.size.loc, kp, "box edges must be between 1e-07 and 10000 m");
+        return out;
+      }
     }
     out.size = vec3(s.size, c.L);
     out.shape = shared_shape<geometry::BoxShape>(c, shape_key("box", {out.size[0], out.size[1], out.size[2]}), out.size);
   } else if (s.kind == "sphere") {
     out.kind = geometry::ShapeKind::kSphere;
-    if (!positive(c, s.radius, kp + ".radius")) return out;
+    if (!length(c, s.radius, kp + ".radius")) return out;
     out.radius = s.radius.v * c.L;
     out.shape = shared_shape<geometry::SphereShape>(c, shape_key("sphere", {out.radius}), out.radius);
   } else if (s.kind == "cylinder") {
     out.kind = geometry::ShapeKind::kCylinder;
-    const bool ok = positive(c, s.radius, kp + ".radius") & positive(c, s.height, kp + ".height");
+    const bool ok = length(c, s.radius, kp + ".radius") & length(c, s.height, kp + ".height");
     if (!ok) return out;
     out.radius = s.radius.v * c.L, out.height = s.height.v * c.L;
     out.shape = shared_shape<geometry::CylinderShape>(c, shape_key("cylinder", {out.radius, out.height}), out.radius, out.height);
   } else if (s.kind == "torus") {
     out.kind = geometry::ShapeKind::kTorus;
-    const bool ok = positive(c, s.major, kp + ".major") & positive(c, s.minor, kp + ".minor");
+    const bool ok = length(c, s.major, kp + ".major") & length(c, s.minor, kp + ".minor");
     if (!ok) return out;
     if (s.minor.v >= s.major.v) {
       c.d.add(s.minor.loc, kp + ".minor", "the tube radius (minor) must be smaller than the major radius");
@@ -133,7 +187,7 @@ ShapeDesc shape(Ctx& c, const ShapeSpec& s, const std::string& path) {
     if (!s.file.set) return out;
     double scale = 1;
     if (s.scale.set) {
-      if (!positive(c, s.scale, kp + ".scale", "number")) return out;
+      if (!positive(c, s.scale, kp + ".scale", "number") || !within(c, s.scale, kp + ".scale", 1e6, 1, "")) return out;
       scale = s.scale.v;
     }
     const std::filesystem::path file =
@@ -163,14 +217,18 @@ void read_outputs(const SceneSpec& s, double L, double A, Diagnostics& d, std::o
   if (s.field_set) {
     FieldOutput f;
     f.path = s.field_path.v;
-    if (s.field_voxel.set && positive(c, s.field_voxel, "outputs.field.voxel")) f.voxel = s.field_voxel.v * L;
+    if (s.field_path.set) {
+      if (const auto e = frame_pattern_error(f.path)) d.add(s.field_path.loc, "outputs.field.path", *e);
+      else if (const auto e2 = output_path_error(f.path, true)) d.add(s.field_path.loc, "outputs.field.path", *e2);
+    }
+    if (s.field_voxel.set && length(c, s.field_voxel, "outputs.field.voxel")) f.voxel = s.field_voxel.v * L;
     if (s.field_margin.set) {
       if (!(s.field_margin.v >= 0)) d.add(s.field_margin.loc, "outputs.field.margin", "must be >= 0");
-      else f.margin = s.field_margin.v * L;
+      else if (within(c, s.field_margin, "outputs.field.margin", kMaxLength, L, "m")) f.margin = s.field_margin.v * L;
     }
     if (s.field_every.set) {
-      if (!(s.field_every.v >= 1) || s.field_every.v != std::floor(s.field_every.v)) {
-        d.add(s.field_every.loc, "outputs.field.every", "must be a whole number >= 1");
+      if (!(s.field_every.v >= 1 && s.field_every.v <= kMaxFrames) || s.field_every.v != std::floor(s.field_every.v)) {
+        d.add(s.field_every.loc, "outputs.field.every", "must be a whole number from 1 to 1000000");
       } else {
         f.every = int(s.field_every.v);
       }
@@ -179,6 +237,11 @@ void read_outputs(const SceneSpec& s, double L, double A, Diagnostics& d, std::o
       d.add(s.field_bounds_auto.loc, "outputs.field.bounds", "expected 'auto' or [[xmin, ymin, zmin], [xmax, ymax, zmax]]");
     }
     if (s.field_bounds.set) {
+      for (const auto& corner : s.field_bounds.v) {
+        for (double x : corner) {
+          if (!(std::abs(x * L) <= kMaxCoordinate)) d.add(s.field_bounds.loc, "outputs.field.bounds", "out of range: at most 1e6 m");
+        }
+      }
       f.auto_bounds = false;
       f.bounds_min = Vec3(s.field_bounds.v[0][0], s.field_bounds.v[0][1], s.field_bounds.v[0][2]) * L;
       f.bounds_max = Vec3(s.field_bounds.v[1][0], s.field_bounds.v[1][1], s.field_bounds.v[1][2]) * L;
@@ -191,6 +254,10 @@ void read_outputs(const SceneSpec& s, double L, double A, Diagnostics& d, std::o
   if (s.preview_set) {
     PreviewOutput p;
     p.path = s.preview_path.v;
+    if (s.preview_path.set) {
+      if (const auto e = frame_pattern_error(p.path)) d.add(s.preview_path.loc, "outputs.preview.path", *e);
+      else if (const auto e2 = output_path_error(p.path, true)) d.add(s.preview_path.loc, "outputs.preview.path", *e2);
+    }
     if (s.preview_size.set) {
       const double w = s.preview_size.v[0], h = s.preview_size.v[1];
       if (!(w >= 16 && h >= 16 && w <= 16384 && h <= 16384) || w != std::floor(w) || h != std::floor(h)) {
@@ -200,6 +267,8 @@ void read_outputs(const SceneSpec& s, double L, double A, Diagnostics& d, std::o
       }
     }
     if (s.field_lines.set) p.field_lines = s.field_lines.v;
+    within(c, s.camera.position, "outputs.preview.camera.position", kMaxCoordinate, L, "m");
+    within(c, s.camera.look_at, "outputs.preview.camera.look_at", kMaxCoordinate, L, "m");
     if (s.camera.set && s.camera.position.set && s.camera.look_at.set) {
       Camera cam;
       cam.position = vec3(s.camera.position, L);
@@ -320,13 +389,23 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
     else d.add(s.angle_unit.loc, "units.angle", "expected deg or rad, got '" + s.angle_unit.v + "'");
   }
   sc.name = s.name.set ? s.name.v : std::filesystem::path(s.file).stem().string();
+  if (s.name.set) {
+    if (const auto e = scene_name_error(s.name.v)) d.add(s.name.loc, "name", *e);
+  }
 
   // Time.
-  if (s.fps.set && positive(c, s.fps, "time.fps", "frame rate")) sc.fps = s.fps.v;
+  if (s.fps.set && positive(c, s.fps, "time.fps", "frame rate")) {
+    if (!(s.fps.v >= 1e-3 && s.fps.v <= 1e5)) d.add(s.fps.loc, "time.fps", "out of range: from 0.001 to 100000 frames per second");
+    else sc.fps = s.fps.v;
+  }
   if (s.frames.set) {
     const double a = s.frames.v[0], b = s.frames.v[1];
     if (a != std::floor(a) || b != std::floor(b)) {
       d.add(s.frames.loc, "time.frames", "frame numbers must be integers");
+    } else if (!(std::abs(a) <= kMaxFrame && std::abs(b) <= kMaxFrame)) {
+      d.add(s.frames.loc, "time.frames", "frame numbers must be within +-100000000");
+    } else if (b - a + 1 > kMaxFrames) {
+      d.add(s.frames.loc, "time.frames", "more than 1000000 frames in one shot; split it into several bakes");
     } else if (b < a) {
       d.add(s.frames.loc, "time.frames",
             "frame range reversed: [" + std::to_string(int(a)) + ", " + std::to_string(int(b)) + "]; give [first, last]");
@@ -340,11 +419,13 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       d.add(s.dt.loc, "time.dt", "the physics substep must be positive, got " + std::to_string(s.dt.v));
     } else if (s.dt.v > 1.0 / sc.fps + 1e-15) {
       d.add(s.dt.loc, "time.dt", "the physics substep must not exceed the frame interval 1/fps");
+    } else if (1.0 / (sc.fps * s.dt.v) > kMaxStepsPerFrame) {
+      d.add(s.dt.loc, "time.dt", "more than 1000000 physics substeps per frame: dt must be at least 1e-6 / fps");
     } else {
       sc.dt = s.dt.v;
     }
   }
-  if (s.gravity.set) sc.gravity = vec3(s.gravity, c.L);
+  if (s.gravity.set && within(c, s.gravity, "gravity", kMaxAcceleration, c.L, "m/s²")) sc.gravity = vec3(s.gravity, c.L);
 
   // Magnetics settings and presets.
   auto& mg = sc.magnetics;
@@ -353,7 +434,7 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       d.add(s.quality.loc, "magnetics.quality", "expected draft, default or high, got '" + s.quality.v + "'");
     }
   }
-  if (s.cell_size.set && positive(c, s.cell_size, "magnetics.cell_size")) mg.cell_size = s.cell_size.v * c.L;
+  if (s.cell_size.set && length(c, s.cell_size, "magnetics.cell_size")) mg.cell_size = s.cell_size.v * c.L;
   if (s.theta.set) {
     if (!(s.theta.v >= 0 && s.theta.v <= 1)) d.add(s.theta.loc, "magnetics.theta", "must be in [0, 1]");
     else mg.theta = s.theta.v;
@@ -372,7 +453,9 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       mg.induction_tolerance = s.induction_tolerance.v;
     }
   }
-  if (s.external_field.set) mg.external_field = vec3(s.external_field);
+  if (s.external_field.set && within(c, s.external_field, "magnetics.external_field", kMaxFieldTesla, 1, "T")) {
+    mg.external_field = vec3(s.external_field);
+  }
 
   // Materials.
   std::vector<std::string> material_names;
@@ -386,14 +469,17 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       if (ms.kind.v == "permanent") {
         m.kind = magnetics::MaterialKind::kPermanent;
         if (!ms.remanence.set) d.add(ms.loc, mp, "a permanent material needs its remanence (tesla)");
-        else if (positive(c, ms.remanence, mp + ".remanence", "remanence in tesla")) m.remanence = ms.remanence.v;
+        else if (positive(c, ms.remanence, mp + ".remanence", "remanence in tesla") &&
+                 within(c, ms.remanence, mp + ".remanence", kMaxFieldTesla, 1, "T")) {
+          m.remanence = ms.remanence.v;
+        }
       } else if (ms.kind.v == "soft" || ms.kind.v == "linear") {
         m.kind = magnetics::MaterialKind::kLinear;
         if (!ms.chi.set) {
           d.add(ms.loc, mp, "a " + ms.kind.v + " material needs its susceptibility chi");
         } else if (!(ms.chi.v > -1)) {
           d.add(ms.chi.loc, mp + ".chi", "chi must be greater than -1 (use kind: superconductor for chi = -1)");
-        } else {
+        } else if (within(c, ms.chi, mp + ".chi", kMaxSusceptibility, 1, "")) {
           m.chi = ms.chi.v;
         }
       } else if (ms.kind.v == "superconductor") {
@@ -413,7 +499,10 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
         d.add(ms.chi.loc, mp + ".chi", "only soft and linear materials have a susceptibility");
       }
     }
-    if (ms.density.set && positive(c, ms.density, mp + ".density", "density in kg/m³")) m.density = ms.density.v;
+    if (ms.density.set && positive(c, ms.density, mp + ".density", "density in kg/m³") &&
+        within(c, ms.density, mp + ".density", kMaxDensity, 1, "kg/m³")) {
+      m.density = ms.density.v;
+    }
     material_names.push_back(m.name);
     sc.materials.push_back(m);
   }
@@ -452,7 +541,9 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
     if (!bs.shape.kind.empty()) b.shape = shape(c, bs.shape, bp + ".shape");
     b.material = find_material(bs.material, bp + ".material");
     check_magnetization(b.material, bs.magnetization, bs.loc, bp, b.magnetization);
-    if (bs.position.set) b.pose.position = vec3(bs.position, c.L);
+    if (bs.position.set && within(c, bs.position, bp + ".position", kMaxCoordinate, c.L, "m")) {
+      b.pose.position = vec3(bs.position, c.L);
+    }
     if (auto q = orientation(c, bs.orientation, bp)) b.pose.rotation = *q;
     if (bs.motion.set) {
       if (bs.motion.v == "dynamic") b.motion = Motion::kDynamic;
@@ -461,15 +552,19 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       else d.add(bs.motion.loc, bp + ".motion", "expected dynamic, static or kinematic, got '" + bs.motion.v + "'");
     }
     if (bs.friction.set) {
-      if (!(bs.friction.v >= 0)) d.add(bs.friction.loc, bp + ".friction", "must be >= 0");
+      if (!(bs.friction.v >= 0 && bs.friction.v <= 100)) d.add(bs.friction.loc, bp + ".friction", "must be in [0, 100]");
       else b.friction = bs.friction.v;
     }
     if (bs.restitution.set) {
       if (!(bs.restitution.v >= 0 && bs.restitution.v <= 1)) d.add(bs.restitution.loc, bp + ".restitution", "must be in [0, 1]");
       else b.restitution = bs.restitution.v;
     }
-    if (bs.velocity.set) b.velocity = vec3(bs.velocity, c.L);
-    if (bs.angular_velocity.set) b.angular_velocity = vec3(bs.angular_velocity, c.A);
+    if (bs.velocity.set && within(c, bs.velocity, bp + ".velocity", kMaxSpeed, c.L, "m/s")) {
+      b.velocity = vec3(bs.velocity, c.L);
+    }
+    if (bs.angular_velocity.set && within(c, bs.angular_velocity, bp + ".angular_velocity", kMaxSpin, c.A, "rad/s")) {
+      b.angular_velocity = vec3(bs.angular_velocity, c.A);
+    }
     // Keys.
     if (!bs.keys.empty() && b.motion != Motion::kKinematic) {
       d.add(bs.keys_loc, bp + ".keys", "only kinematic bodies have keys (add motion: kinematic)");
@@ -479,6 +574,8 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       const KeySpec& ks = bs.keys[k];
       const std::string kp = bp + ".keys[" + std::to_string(k) + "]";
       if (!ks.t.set) continue;
+      if (!within(c, ks.t, kp + ".t", 1e9, 1, "s")) continue;
+      within(c, ks.position, kp + ".position", kMaxCoordinate, c.L, "m");
       if (!(ks.t.v > last_t)) {
         d.add(ks.t.loc, kp + ".t", "keys out of time order: t = " + std::to_string(ks.t.v) +
                                        " does not come after the previous key's t = " + std::to_string(last_t));
@@ -496,7 +593,9 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       const std::string pp = bp + ".parts[" + std::to_string(j) + "]";
       Part p;
       if (!ps.shape.kind.empty()) p.shape = shape(c, ps.shape, pp + ".shape");
-      if (ps.position.set) p.pose.position = vec3(ps.position, c.L);
+      if (ps.position.set && within(c, ps.position, pp + ".position", kMaxLength, c.L, "m")) {
+        p.pose.position = vec3(ps.position, c.L);
+      }
       if (auto q = orientation(c, ps.orientation, pp)) p.pose.rotation = *q;
       p.material = find_material(ps.material, pp + ".material");
       check_magnetization(p.material, ps.magnetization, ps.loc, pp, p.magnetization);
@@ -507,8 +606,13 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
     if (b.shape.shape) {
       const geometry::MassProperties mp = b.shape.shape->mass_properties();
       std::optional<double> density;
-      if (bs.density.set && positive(c, bs.density, bp + ".density", "density in kg/m³")) density = bs.density.v;
-      if (bs.mass.set && positive(c, bs.mass, bp + ".mass", "mass in kg")) density = bs.mass.v / mp.volume;
+      if (bs.density.set && positive(c, bs.density, bp + ".density", "density in kg/m³") &&
+          within(c, bs.density, bp + ".density", kMaxDensity, 1, "kg/m³")) {
+        density = bs.density.v;
+      }
+      if (bs.mass.set && positive(c, bs.mass, bp + ".mass", "mass in kg") && within(c, bs.mass, bp + ".mass", 1e12, 1, "kg")) {
+        density = bs.mass.v / mp.volume;
+      }
       if (!density && b.material >= 0) density = sc.materials[b.material].density;
       if (density) {
         b.mass = *density * mp.volume;
@@ -522,19 +626,29 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
   }
 
   // Outputs.
-  if (s.cache.set) sc.cache = s.cache.v;
+  if (s.cache.set) {
+    // Absolute paths pass here; the command refuses them unless --allow-absolute-outputs.
+    if (const auto e = output_path_error(s.cache.v, true)) d.add(s.cache.loc, "outputs.cache", *e);
+    else sc.cache = s.cache.v;
+  }
   read_outputs(s, c.L, c.A, d, sc.field, sc.preview);
   return sc;
 }
 
-void outputs_of_text(const std::string& text, std::optional<FieldOutput>& field, std::optional<PreviewOutput>& preview) {
+std::string outputs_of_text(const std::string& text, std::optional<FieldOutput>& field,
+                            std::optional<PreviewOutput>& preview) {
   Diagnostics d("scene");
   const SceneSpec s = parse_scene_text(text, "scene", d);
   double L = 1, A = 1;
   if (s.length_unit.v == "cm") L = 0.01;
   if (s.length_unit.v == "mm") L = 0.001;
   if (s.angle_unit.v == "deg") A = kPi / 180;
-  read_outputs(s, L, A, d, field, preview);
+  Diagnostics outputs("scene");
+  read_outputs(s, L, A, outputs, field, preview);
+  if (outputs.empty()) return "";
+  // A stored pattern or path that would not validate today is never used.
+  field.reset(), preview.reset();
+  return outputs.format();
 }
 
 Scene load_scene_text(const std::string& text, const std::string& file) {

@@ -251,12 +251,15 @@ namespace {
 
 // A remanence that overflows the moments: eval and probe exit 1 with a message, print nothing.
 TEST(Commands, NonFiniteResultsExitOneAndPrintNothing) {
+  // Two soft spheres placed at the same point: their coincident cells make the induction
+  // singular. eval and probe must say so and print no numbers.
   const std::string path = temp_scene(
-      "overflow.yaml",
+      "coincident.yaml",
       "magbake: 1\nunits: {length: mm, angle: deg}\ntime: {fps: 30, frames: [1, 2], dt: 0.001}\n"
-      "materials:\n  hot: {kind: permanent, remanence: 1e308, density: 7500}\n  steel: {kind: soft, chi: 700, density: 7850}\n"
-      "bodies:\n  - {name: a, shape: {box: [10, 10, 10]}, material: hot, magnetization: [1, 0, 0]}\n"
-      "  - {name: b, shape: {sphere: {radius: 4}}, material: steel, position: [12, 0, 0]}\n");
+      "materials:\n  n42: {kind: permanent, remanence: 1.3, density: 7500}\n  steel: {kind: soft, chi: 700, density: 7850}\n"
+      "bodies:\n  - {name: a, shape: {box: [10, 10, 10]}, material: n42, magnetization: [1, 0, 0]}\n"
+      "  - {name: b, shape: {sphere: {radius: 4}}, material: steel, position: [12, 0, 0]}\n"
+      "  - {name: c, shape: {sphere: {radius: 4}}, material: steel, position: [12, 0, 0]}\n");
   const Outcome e = magbake("eval " + path + " --json");
   EXPECT_EQ(e.code, 1);
   EXPECT_TRUE(e.out.empty()) << e.out;
