@@ -3,7 +3,6 @@
 #include <spdlog/fmt/fmt.h>
 
 #include <chrono>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -21,10 +20,6 @@
 
 namespace magbake::cli {
 namespace fs = std::filesystem;
-
-namespace {
-
-}  // namespace
 
 // "A-B" or "A" -> [A, B].
 bool parse_range(const std::string& text, int& a, int& b) {
@@ -44,16 +39,6 @@ bool parse_range(const std::string& text, int& a, int& b) {
   }
 }
 
-namespace {
-
-// Test hook: pretend the disk is full when writing frame N (MAGBAKE_TEST_FAIL_WRITE_AT_FRAME).
-void maybe_inject_write_failure(int frame) {
-  static const char* env = std::getenv("MAGBAKE_TEST_FAIL_WRITE_AT_FRAME");
-  if (env && std::atoi(env) == frame) throw io::h5::Error("write frame: No space left on device (injected by test)");
-}
-
-}  // namespace
-
 fs::path cache_path_for(const scene::Scene& s, const std::string& out_dir) {
   const fs::path given = s.cache ? fs::path(*s.cache) : fs::path(s.name + ".h5");
   if (out_dir.empty()) return given;
@@ -61,7 +46,7 @@ fs::path cache_path_for(const scene::Scene& s, const std::string& out_dir) {
 }
 
 int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
-             const Global& g, bool strict, bool allow_absolute) {
+             const Global& g, bool strict, bool allow_absolute, const BakeHooks& hooks) {
   auto loaded = load_or_report(path);
   if (!loaded) return kUsage;
   const scene::Scene& s = *loaded;
@@ -128,6 +113,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
     return kUsage;
   }
   sim::Simulator simulator(s, model);
+  if (hooks.after_magnetics) simulator.set_after_magnetics(hooks.after_magnetics);
   install_interrupt_handlers();
 
   // Fresh bake, or resume from the last complete frame of an interrupted (or killed) one.
@@ -197,7 +183,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
     // The state at next_frame - 1 is in the simulator; frames before `first` are simulated only.
     if (next_frame == s.first_frame) {
       if (next_frame >= first) {
-        maybe_inject_write_failure(next_frame);
+        if (hooks.before_write) hooks.before_write(next_frame);
         writer->append(next_frame, 0.0, simulator.state(), simulator.measure());
         ++written;
         progress.update(next_frame - first + 1, "frame " + std::to_string(next_frame));
@@ -216,7 +202,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
       magnetics_seconds += d.magnetics_seconds;
       rigid_seconds += d.rigid_seconds;
       if (simulator.frame() >= first) {
-        maybe_inject_write_failure(simulator.frame());
+        if (hooks.before_write) hooks.before_write(simulator.frame());
         writer->append(simulator.frame(), s.frame_time(simulator.frame()), simulator.state(), d);
         ++written;
       }

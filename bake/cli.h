@@ -3,11 +3,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <optional>
 #include <string>
 
 #include "io/diff.h"
 #include "scene/load.h"
+#include "sim/sim_state.h"
 
 namespace magbake::cli {
 
@@ -42,9 +44,17 @@ std::string scene_summary(const scene::Scene& s, bool all_bodies = false);
 int cmd_check(const std::string& path, double trial_seconds, bool json, const Global& g);
 /// "A-B" or "A" -> a, b.
 bool parse_range(const std::string& text, int& a, int& b);
+/// Test seams of `bake` (unset in the program): a state hook run after every magnetics
+/// evaluation, and a callback run before each frame is written (it may throw io::h5::Error to
+/// act as a full disk).
+struct BakeHooks {
+  std::function<void(int frame, sim::SimState& state)> after_magnetics;
+  std::function<void(int frame)> before_write;
+};
+
 /// `bake`: `allow_absolute` lets absolute output paths of the scene be used (scene/output_path.h).
 int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
-             const Global& g, bool strict = false, bool allow_absolute = false);
+             const Global& g, bool strict = false, bool allow_absolute = false, const BakeHooks& hooks = {});
 int cmd_info_cache(const std::string& path, bool all_bodies = false);
 int cmd_info(const std::string& path, const Global& g);
 int cmd_eval(const std::string& path, double time, bool json, const Global& g);

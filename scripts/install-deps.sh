@@ -21,6 +21,8 @@ packages=(
   python3 python3-numpy python3-h5py python3-openvdb python3-matplotlib
   # disk-full test (loop-mounted ext2 image)
   e2fsprogs util-linux
+  # fuzzing (libFuzzer comes with Debian's clang) and the sanitizer build
+  clang
 )
 
 missing=()

@@ -388,6 +388,10 @@ CacheReader::CacheReader(const std::string& path) : path_(path), impl_(std::make
   if (f < 0) {
     Handle fapl(H5Pcreate(H5P_FILE_ACCESS));
     H5Pset_libver_bounds(fapl.id(), H5F_LIBVER_LATEST, H5F_LIBVER_LATEST);
+    // A SWMR reader retries a metadata read whose checksum fails 100 times with growing sleeps
+    // (HDF5's default, for racing a live writer): a corrupt file then hangs for minutes (found
+    // by fuzz/cache_fuzzer). Our caches are read after their writer flushed: a few attempts.
+    H5Pset_metadata_read_attempts(fapl.id(), 4);
     f = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl.id());
   }
   if (f < 0) throw std::runtime_error(path + ": cannot open as HDF5 (corrupt or truncated?)");

@@ -1,14 +1,39 @@
 #include "field_volume.h"
 
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Prune.h>
 
 #include <cmath>
 #include <filesystem>
 #include <mutex>
+#include <ostream>
+#include <streambuf>
 #include <stdexcept>
 
 namespace magbake::io {
+namespace {
+
+// A stream buffer that only counts the bytes written to it.
+class ByteCounter : public std::streambuf {
+ public:
+  std::streamsize bytes() const { return bytes_; }
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (!traits_type::eq_int_type(c, traits_type::eof())) ++bytes_;
+    return traits_type::not_eof(c);
+  }
+  std::streamsize xsputn(const char*, std::streamsize n) override {
+    bytes_ += n;
+    return n;
+  }
+
+ private:
+  std::streamsize bytes_ = 0;
+};
+
+}  // namespace
 
 float display_density(float b) {
   if (!(b > 1e-5f)) return 0.0f;
@@ -78,14 +103,21 @@ std::size_t write_field_volume(const std::string& path, const FieldSamples& s, c
     file.setCompression(openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK);
     file.write(grids, file_meta);
     file.close();
-    // OpenVDB writes through a std::ofstream whose failures it does not check (a full disk gives
-    // a truncated file and no error): read the whole file back before it gets its final name.
-    openvdb::io::File check(tmp);
-    check.open(false);
-    for (const char* name : {"B", "density"}) {
-      if (!check.hasGrid(name) || !check.readGrid(name)) throw std::runtime_error(std::string("grid ") + name + " did not read back");
+    // OpenVDB writes through a std::ofstream whose failures it does not check: a full disk gives
+    // a truncated file and no error (and reading such a file back can allocate gigabytes). The
+    // same archive serialized to a byte counter gives the size the file must have (io::Stream
+    // and io::File write the same number of bytes).
+    ByteCounter counter;
+    std::ostream counted(&counter);
+    openvdb::io::Stream stream(counted);
+    stream.setCompression(openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK);
+    stream.write(grids, file_meta);
+    std::error_code ec;
+    const auto written = std::filesystem::file_size(tmp, ec);
+    if (ec || static_cast<std::streamsize>(written) != counter.bytes()) {
+      throw std::runtime_error("short write: " + std::to_string(ec ? 0 : written) + " of " +
+                               std::to_string(counter.bytes()) + " bytes (disk full?)");
     }
-    check.close();
   } catch (const std::exception& e) {
     std::error_code ec;
     std::filesystem::remove(tmp, ec);

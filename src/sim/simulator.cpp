@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 
 #include "scene/scene_magnetics.h"
@@ -118,19 +117,6 @@ int Simulator::substep_split(double h) const {
   return split;
 }
 
-void Simulator::inject_fault_for_tests(int frame) {
-  // MAGBAKE_TEST_NAN_AT_FRAME=N poisons the first dynamic body's force while computing frame N,
-  // so tests can check that a numerical fault stops the bake cleanly.
-  static const char* env = std::getenv("MAGBAKE_TEST_NAN_AT_FRAME");
-  if (!env || std::atoi(env) != frame) return;
-  for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
-    if (scene_.bodies[i].motion == scene::Motion::kDynamic) {
-      state_.magnetic_force[i][0] = std::numeric_limits<double>::quiet_NaN();
-      return;
-    }
-  }
-}
-
 void Simulator::check_finite(int frame) const {
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     auto bad = [](const Vec3& v) { return !v.allFinite(); };
@@ -169,7 +155,7 @@ FrameDiagnostics Simulator::advance_frame() {
       const int pieces = std::max(1, static_cast<int>(std::ceil(remaining / target - 1e-9)));
       const double hs = remaining / pieces;
       const double t = t0 + done;
-      inject_fault_for_tests(next);
+      if (after_magnetics_) after_magnetics_(next, state_);
       check_finite(next);
       const auto tr = Clock::now();
       world_->step(t, hs, state_.magnetic_force, state_.magnetic_torque);

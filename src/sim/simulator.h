@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -63,12 +64,17 @@ class Simulator {
   /// Penetration (m) above which initial overlaps are reported and separated.
   static constexpr double kOverlapTolerance = 1e-4;
 
+  /// A callback that may change the state after every magnetics evaluation, before the state is
+  /// checked for non-finite values and stepped; `frame` is the frame being computed. A test
+  /// seam (e.g. to poison a force and see the fault handled); unset in production.
+  using StateHook = std::function<void(int frame, SimState& state)>;
+  void set_after_magnetics(StateHook hook) { after_magnetics_ = std::move(hook); }
+
  private:
   void evaluate_magnetics(FrameDiagnostics& d);
   /// Number of equal pieces a step of h seconds needs from the current state (>= 1).
   int substep_split(double h) const;
   void check_finite(int frame) const;
-  void inject_fault_for_tests(int frame);
 
   const scene::Scene& scene_;
   const magnetics::Model& model_;
@@ -84,6 +90,7 @@ class Simulator {
   mutable std::vector<std::vector<Vec3>> contact_normals_;  // per body, scratch of substep_split()
   std::vector<RigidWorld::Penetration> initial_overlaps_;
   double last_energy_ = 0;  // total energy at the current frame, J (for energy_drift)
+  StateHook after_magnetics_;
 };
 
 }  // namespace magbake::sim
