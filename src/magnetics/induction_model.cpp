@@ -137,6 +137,12 @@ void build_induction_model(Model& m, const std::vector<const Solid*>& part_solid
   }
   const int nblock = static_cast<int>(m.precond_begin.size()) - 1;
   m.precond_lu.resize(nblock);
+  // Eigen blocks its dense products (inside the LU) by the CPU's cache sizes, read with cpuid:
+  // the summation order, and so the rounding of every induced moment, would depend on the
+  // machine (the same binary baked different caches on an Intel and an AMD VM). Fixed sizes
+  // make the factors a function of the model alone (Determinism.ResultsDoNotDependOnTheMachines
+  // CacheSizes). The values are typical of current x86 cores; speed hardly depends on them.
+  Eigen::setCpuCacheSizes(32 * 1024, 512 * 1024, 8 * 1024 * 1024);
   parallel_for_each(nblock, 1, [&](int k) {
     const int r0 = m.precond_begin[k], n = m.precond_begin[k + 1] - r0;
     Eigen::MatrixXd A = Eigen::MatrixXd::Identity(3 * n, 3 * n);

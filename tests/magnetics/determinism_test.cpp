@@ -54,5 +54,19 @@ TEST(Determinism, OneAndTwoThreadsGiveIdenticalBits) {
   EXPECT_GT(one.result.induction.iterations, 1);
 }
 
+TEST(Determinism, ResultsDoNotDependOnTheMachinesCacheSizes) {
+  // Eigen sizes the blocks of its dense products (the induction preconditioner's LU) from the
+  // CPU's cache sizes, which changes the summation order and so the rounding: the same binary
+  // gave different caches on an Intel and an AMD machine. The model is built with fixed sizes.
+  Eigen::setCpuCacheSizes(16 * 1024, 128 * 1024, 1024 * 1024);
+  const Snapshot small = run(2);
+  Eigen::setCpuCacheSizes(96 * 1024, 2048 * 1024, 384 * 1024 * 1024);
+  const Snapshot large = run(2);
+  EXPECT_TRUE(same_bits(small.result.force, large.result.force));
+  EXPECT_TRUE(same_bits(small.result.moment, large.result.moment));
+  EXPECT_EQ(std::memcmp(&small.result.energy, &large.result.energy, sizeof(double)), 0);
+  EXPECT_TRUE(same_bits(small.field, large.field));
+}
+
 }  // namespace
 }  // namespace magbake::testing
