@@ -189,6 +189,7 @@ int run(int argc, char** argv) {
     return cli::kUsage;
   }
   if ((*eval || *probe) && !number_ok("--time", time, -1e9, 1e9)) return cli::kUsage;
+  if (*check && !number_ok("--trial", trial_seconds, 0, 1e6)) return cli::kUsage;  // CLI::Range lets NaN through
   if (*field) {
     if (field->count("--voxel") && !number_ok("--voxel", field_voxel, 1e-7, 1e4)) return cli::kUsage;
     if (field->count("--margin") && !number_ok("--margin", field_margin, 0, 1e4)) return cli::kUsage;

@@ -212,7 +212,7 @@ TEST_F(Hostile, CommandLineNumbersAreChecked) {
   }
   const fs::path s = scene("s.yaml", kScene);
   for (const std::string& args : std::vector<std::string>{"eval --time nan", "eval --time 1e300", "probe --at 0,0,0 --time inf",
-                                 "--threads -3 eval", "diff " + q(cache) + " " + q(cache) + " --atol nan"}) {
+                                 "--threads -3 eval", "check --trial nan", "diff " + q(cache) + " " + q(cache) + " --atol nan"}) {
     const bool has_scene = args.rfind("diff", 0) != 0;
     expect_clean_exit(sh(exe() + " " + args + (has_scene ? " " + q(s) : "")), 2, args);
   }
