@@ -23,6 +23,8 @@ packages=(
   e2fsprogs util-linux
   # fuzzing (libFuzzer comes with Debian's clang) and the sanitizer build
   clang
+  # the same binary baked on emulated Intel and AMD CPUs (Bake.SameCacheOnEmulatedIntelAndAmdCpus)
+  qemu-user binutils
 )
 
 missing=()

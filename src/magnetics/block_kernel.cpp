@@ -5,6 +5,8 @@
 
 #if defined(__AVX2__) && defined(__FMA__)
 #include <immintrin.h>
+
+#include "simd_rsqrt.h"
 #define MAGBAKE_AVX2 1
 #endif
 
@@ -62,13 +64,6 @@ void block_scalar(const State& s, int tb, int te, int sb, int se, const Vec3& de
 }
 
 #ifdef MAGBAKE_AVX2
-// Twice the reciprocal square root, to full float precision: z = y (3 - x y²) with y = rsqrt(x)
-// (one Newton step; the factor 2 is folded into the constants of the caller).
-inline __m256 rsqrt2_nr(__m256 x) {
-  const __m256 y = _mm256_rsqrt_ps(x);
-  return _mm256_mul_ps(y, _mm256_fnmadd_ps(x, _mm256_mul_ps(y, y), _mm256_set1_ps(3.0f)));
-}
-
 inline double hsum(__m256 v) {
   alignas(32) float t[8];
   _mm256_store_ps(t, v);
@@ -115,7 +110,7 @@ void block_avx2(const State& s, int tb, int te, int sb, int se, const Vec3& delt
         __m256 rz = _mm256_sub_ps(Z, _mm256_set1_ps(s.fz[i]));
         const __m256 bmx = _mm256_set1_ps(s.fmx[i]), bmy = _mm256_set1_ps(s.fmy[i]), bmz = _mm256_set1_ps(s.fmz[i]);
         __m256 d2 = _mm256_fmadd_ps(rz, rz, _mm256_fmadd_ps(ry, ry, _mm256_mul_ps(rx, rx)));
-        __m256 z = rsqrt2_nr(d2);  // 2/d
+        __m256 z = two_over_sqrt(d2);  // 2/d
         [[maybe_unused]] __m256 stretch = _mm256_setzero_ps();
         if constexpr (kClamp) {
           // Keep the direction, lengthen r to at least the contact distance of the two cells.
@@ -123,8 +118,9 @@ void block_avx2(const State& s, int tb, int te, int sb, int se, const Vec3& delt
           const __m256 sc = _mm256_max_ps(_mm256_set1_ps(1.0f), _mm256_mul_ps(dmin, _mm256_mul_ps(_mm256_set1_ps(0.5f), z)));
           rx = _mm256_mul_ps(rx, sc), ry = _mm256_mul_ps(ry, sc), rz = _mm256_mul_ps(rz, sc);
           d2 = _mm256_mul_ps(d2, _mm256_mul_ps(sc, sc));
-          z = rsqrt2_nr(d2);
-          stretch = _mm256_sub_ps(_mm256_set1_ps(1.0f), _mm256_div_ps(_mm256_set1_ps(1.0f), sc));  // 1 - |r|/|r_c|
+          const __m256 inv_sc = _mm256_div_ps(_mm256_set1_ps(1.0f), sc);  // |r| / |r_c|
+          z = _mm256_mul_ps(z, inv_sc);                                    // 2 / |r_c|
+          stretch = _mm256_sub_ps(_mm256_set1_ps(1.0f), inv_sc);           // 1 - |r|/|r_c|
         }
         // In units of 1/d = z/2: inv2 = z²/4, inv5 = z⁵/32 (the 1/4, 1/32 go into the constants).
         const __m256 z2 = _mm256_mul_ps(z, z);

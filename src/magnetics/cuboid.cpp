@@ -10,12 +10,13 @@
 #if defined(__AVX2__)
 #include <immintrin.h>
 
-// glibc's vector math library (libmvec, part of libm): 4-lane AVX2 atan2 and log, at most 4 ulp
-// from the correctly rounded result. Called explicitly (not through -ffast-math
-// auto-vectorization), so every build type evaluates the same functions. A MAGBAKE_PORTABLE
-// (baseline x86-64) build uses scalar libm instead, as it does for the block kernels.
+// glibc's vector math library (libmvec, part of libm): 4-lane AVX2 atan2, at most 4 ulp from
+// the correctly rounded result. Called explicitly (not through -ffast-math auto-vectorization),
+// so every build type evaluates the same function. A MAGBAKE_PORTABLE (baseline x86-64) build
+// uses scalar libm instead, as it does for the block kernels. Its AVX2 log is not used: it
+// starts from vrcpps, an estimate whose bits differ between Intel and AMD CPUs, so its results
+// could depend on the machine (the atan2 path has no such estimate).
 extern "C" __m256d _ZGVdN4vv_atan2(__m256d y, __m256d x);
-extern "C" __m256d _ZGVdN4v_log(__m256d x);
 #endif
 
 namespace magbake::magnetics {
@@ -31,6 +32,30 @@ inline double plus_r(double a, double R, double q2) {
 
 // ln(a + R), see plus_r.
 inline double log_plus_r(double a, double R, double q2) { return std::log(plus_r(a, R, q2)); }
+
+// sum over the 8 vertices q of P_q ln(arg[3q + k]), P_q = s0 s1 s2 the vertex parity, as the
+// logarithm of one product: vertices q and q + 2^k share the line along axis k and have
+// opposite parity, so the sum is ln of the product of 4 ratios arg(q + 2^k) / arg(q) (or its
+// inverse when P(q + 2^k) < 0). One scalar log instead of 8, and no cancellation between large
+// logarithms of nearly equal arguments. Ratios that could overflow the product (a point on the
+// extension of an edge, where plus_r's floor makes an argument ~1e-300) take a log each.
+inline double signed_log_sum(const double* arg, int k) {
+  const int bit = 1 << k;
+  double prod = 1.0, extra = 0.0;
+  for (int q = 0; q < 8; ++q) {
+    if (q & bit) continue;
+    const int q1 = q | bit;
+    const bool plus = (((q1 & 1) ? 1 : 0) + ((q1 & 2) ? 1 : 0) + ((q1 & 4) ? 1 : 0)) % 2 == 1;  // P(q1) = +1
+    const double a1 = arg[3 * q1 + k], a0 = arg[3 * q + k];
+    const double ratio = plus ? a1 / a0 : a0 / a1;
+    if (ratio > 1e-75 && ratio < 1e75) {
+      prod *= ratio;
+    } else {
+      extra += plus ? std::log(a1) - std::log(a0) : std::log(a0) - std::log(a1);
+    }
+  }
+  return std::log(prod) + extra;
+}
 
 // H (in units of sigma / 4pi) at p of the rectangle u in [u0,u1], v in [v0,v1] in the plane
 // w = w0, charge density 1; p in (u, v, w) coordinates; result in (u, v, w) components. With
@@ -182,23 +207,20 @@ Mat3 cuboid_h_tensor(const Vec3& half, const Vec3& x) {
       at_x[3 * q + k] = d[k] >= 0.0 ? den : -den;
     }
   }
-  alignas(32) double at[24], lg[24];
+  alignas(32) double at[24];
 #if defined(__AVX2__)
   for (int i = 0; i < 24; i += 4) {
     _mm256_store_pd(at + i, _ZGVdN4vv_atan2(_mm256_load_pd(at_y + i), _mm256_load_pd(at_x + i)));
-    _mm256_store_pd(lg + i, _ZGVdN4v_log(_mm256_load_pd(log_arg + i)));
   }
 #else
-  for (int i = 0; i < 24; ++i) at[i] = std::atan2(at_y[i], at_x[i]), lg[i] = std::log(log_arg[i]);
+  for (int i = 0; i < 24; ++i) at[i] = std::atan2(at_y[i], at_x[i]);
 #endif
-  double diag[3] = {0, 0, 0}, logs[3] = {0, 0, 0};
+  double diag[3] = {0, 0, 0}, logs[3];
   for (int q = 0; q < 8; ++q) {
     const double P = ((q & 1) ? 1.0 : -1.0) * ((q & 2) ? 1.0 : -1.0) * ((q & 4) ? 1.0 : -1.0);
-    for (int k = 0; k < 3; ++k) {
-      logs[k] += P * lg[3 * q + k];
-      diag[k] += P * at[3 * q + k];
-    }
+    for (int k = 0; k < 3; ++k) diag[k] += P * at[3 * q + k];
   }
+  for (int k = 0; k < 3; ++k) logs[k] = signed_log_sum(log_arg, k);
   Mat3 N;
   N(0, 0) = diag[0], N(1, 1) = diag[1], N(2, 2) = diag[2];
   N(0, 1) = N(1, 0) = -logs[2];

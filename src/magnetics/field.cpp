@@ -7,6 +7,7 @@
 #include "cuboid.h"
 #include "dipole.h"
 #include "parallel.h"
+#include "simd_rsqrt.h"
 
 #if defined(__AVX2__) && defined(__FMA__)
 #include <immintrin.h>
@@ -155,8 +156,7 @@ void dipoles_f32(const std::vector<Source>& src, const std::vector<Vec3>& rel, i
       const __m256 ry = _mm256_sub_ps(Y, _mm256_set1_ps(sy[i]));
       const __m256 rz = _mm256_sub_ps(Z, _mm256_set1_ps(sz[i]));
       const __m256 d2 = _mm256_fmadd_ps(rz, rz, _mm256_fmadd_ps(ry, ry, _mm256_mul_ps(rx, rx)));
-      const __m256 y = _mm256_rsqrt_ps(d2);
-      const __m256 z = _mm256_mul_ps(y, _mm256_fnmadd_ps(d2, _mm256_mul_ps(y, y), _mm256_set1_ps(3.0f)));  // 2/d
+      const __m256 z = two_over_sqrt(d2);  // 2/d
       const __m256 z2 = _mm256_mul_ps(z, z);
       const __m256 z5 = _mm256_mul_ps(_mm256_mul_ps(z2, z2), z);  // 32/d^5
       const __m256 bmx = _mm256_set1_ps(mx[i]), bmy = _mm256_set1_ps(my[i]), bmz = _mm256_set1_ps(mz[i]);

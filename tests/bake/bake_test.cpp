@@ -61,6 +61,44 @@ TEST_F(Bake, GoldenCachesStillMatch) {
   }
 }
 
+// The same binary must bake the same cache on any x86-64-v3 CPU. qemu-user runs it on an
+// emulated Intel (Haswell) and AMD (EPYC-Rome) CPU: other cpuid (vendor, cache sizes, features,
+// so other library dispatch and Eigen blocking) and instructions computed in software. An
+// instruction whose result is implementation-defined (the rsqrtps/rcpps estimates, which Intel
+// and AMD compute differently) gives other bits under emulation than on the host, and so does
+// any code path chosen by CPU model. The scenes cover cuboid and cylinder magnets in contact,
+// induction with the preconditioner, soft spheres and a mesh magnet (tst).
+TEST_F(Bake, SameCacheOnEmulatedIntelAndAmdCpus) {
+  ASSERT_EQ(sh("command -v qemu-x86_64").code, 0) << "qemu-user is missing (scripts/install-deps.sh installs it)";
+  struct Case {
+    std::string scene, cache, frames;
+  };
+  const Case cases[] = {{src("tests/golden/magnets_in_space.yaml"), "magnets_in_space.h5", ""},
+                        {src("tests/golden/sphere_pickup.yaml"), "sphere_pickup.h5", ""},
+                        {src("scenes/paper/tst.yaml"), "tst.h5", " --frames 1-2"}};
+  for (const Case& c : cases) {
+    ASSERT_EQ(sh(exe() + " -q bake " + c.scene + c.frames + " -o " + (dir / "host").string()).code, 0) << c.scene;
+    for (const char* cpu : {"Haswell", "EPYC-Rome"}) {
+      const fs::path out = dir / cpu;
+      const Outcome q = sh("qemu-x86_64 -cpu " + std::string(cpu) + " " + exe() + " -q bake " + c.scene + c.frames +
+                           " -o " + out.string());
+      ASSERT_EQ(q.code, 0) << cpu << " " << c.scene << "\n" << q.out;
+      const Outcome d = sh(exe() + " diff --exact " + (dir / "host" / c.cache).string() + " " + (out / c.cache).string());
+      EXPECT_EQ(d.code, 0) << "on an emulated " << cpu << " CPU " << c.scene << " bakes another cache:\n" << d.out;
+    }
+  }
+}
+
+// The kernels must not use instructions whose results differ between CPU models: the
+// reciprocal and reciprocal-square-root estimates (SSE/AVX rcp*, rsqrt*; AVX-512 rcp14/28,
+// rsqrt14/28). Complements the emulation test, which only sees the code paths its scenes run.
+TEST_F(Bake, NoCpuDependentEstimateInstructionsInTheBinary) {
+  const Outcome o = sh("objdump -d --no-show-raw-insn " + exe() +
+                       " | grep -E '\\s(v?rcp(ps|ss|14ps|14pd|14ss|14sd|28ps|28pd)|v?rsqrt(ps|ss|14ps|14pd|14ss|14sd|28ps|28pd))\\s' | head -5");
+  ASSERT_EQ(o.code, 0) << o.out;
+  EXPECT_EQ(o.out, "") << "estimate instructions in magbake:\n" << o.out;
+}
+
 TEST_F(Bake, DiffReportsTheFirstFrameAndLargestDeviationPerBody) {
   // Same scene, one body nudged: diff must say which body, from which frame, by how much.
   std::ifstream in(src("tests/golden/magnets_in_space.yaml"));

@@ -127,8 +127,12 @@ TEST_F(Preview, FieldLinesOnlyWhenAskedFor) {
   const Image off2 = render("", "default");  // the scene's preview block does not ask for lines
   const Image on = render("--field-lines", "on");
   EXPECT_EQ(field_line_pixels(off2, off), 0);
-  // The bar's loops: thousands of pixels at 480x270.
-  EXPECT_GT(field_line_pixels(on, off), 1500);
+  // The bar's loops: about 1200 pixels at 480x270. Two more lines, from seeds near the
+  // separatrix by the ball, run off the image or close on the bar depending on the last bits of
+  // the field (builds before the cross-CPU determinism changes of 2026-12-02 drew them, later
+  // builds do not), so the
+  // bound counts the loops alone.
+  EXPECT_GT(field_line_pixels(on, off), 800);
   // Lines leave the bar at its poles: above the bar's middle (x = 0) the field runs along -x and the
   // loops cross the vertical through the centre; check a line crosses the column above the bar.
   const Eigen::Vector2i top = project({0, 0, 0.003}, on.w, on.h);
