@@ -126,6 +126,12 @@ void Targets::update_induced_positions(const Model& m, const State& s) {
 
 namespace {
 
+// Work stack of the body-tree walk, one per thread (no allocation once grown).
+std::vector<int>& thread_local_stack() {
+  thread_local std::vector<int> stack;
+  return stack;
+}
+
 // A dipole source for one target group: position relative to the group centre (m), moment.
 struct Source {
   Vec3 x, m;
@@ -196,6 +202,13 @@ std::int64_t field_at_targets(const Model& m, const State& s, const Sources& src
   assert(B.size() == t.position.size());
   std::vector<std::int64_t> work(std::max(ngroup, 0), 0);
 
+  const BodyTree& bt = s.body_tree;
+  if (bt.empty()) {
+    std::fill(B.begin(), B.end(), Vec3::Zero());
+    return 0;
+  }
+  BodyTreeSources agg;
+  agg.aggregate(bt, m, src);
   parallel_for_each(ngroup, 1, [&](int g) {
     const int tb = t.group_begin[g], te = t.group_begin[g + 1];
     for (int q = tb; q < te; ++q) B[q] = Vec3::Zero();
@@ -208,9 +221,26 @@ std::int64_t field_at_targets(const Model& m, const State& s, const Sources& src
     far.clear();
     near.clear();
     int stack[128];
-    for (int body = 0; body < m.body_count; ++body) {
+    // The hierarchy over bodies first: a group of bodies far enough away is one dipole at its
+    // centre; a body that is not opens into its own cell hierarchy.
+    std::vector<int>& tree_stack = thread_local_stack();
+    tree_stack.assign(1, 0);
+    while (!tree_stack.empty()) {
+      const int tn = tree_stack.back();
+      tree_stack.pop_back();
+      if (!agg.active[tn]) continue;
+      const double td = (bt.center[tn] - gc).norm();
+      if (bt.child[tn] >= 0 || bt.body[tn] < 0) {
+        if (well_separated(td, bt.radius[tn], gr, agg.open_radius[tn], gr, opt.theta, opt.near_field, 2.0 * bt.reach[tn])) {
+          far.push_back({bt.center[tn] - gc, agg.moment[tn]});
+        } else {
+          tree_stack.push_back(bt.child[tn] + 1);
+          tree_stack.push_back(bt.child[tn]);
+        }
+        continue;
+      }
+      const int body = bt.body[tn];
       const int root = m.body_root[body];
-      if (root < 0 || !src.node_active[root]) continue;
       const Vec3 origin = s.body_pose[body].position;
       int top = 0;
       stack[top++] = root;

@@ -65,9 +65,23 @@ void build_near_rows(const Model& m, const Settings& st, State& s) {
     double reach = 0;
     for (int q = t.group_begin[g]; q < t.group_begin[g + 1]; ++q) reach = std::max(reach, m.cell_reach[t.cell[q]]);
     const int own_body = m.cell_body[t.cell[t.group_begin[g]]];
-    std::vector<int> stack;
-    for (int body = 0; body < m.body_count; ++body) {
-      if (m.body_root[body] < 0 || body == own_body) continue;
+    std::vector<int> stack, tree_stack(1, 0);
+    const BodyTree& bt = s.body_tree;
+    const double near_reach = m.induction_near * reach;
+    // Bodies whose root spheres can hold a cell within the near radius, found by the hierarchy
+    // over bodies; each then by its own cell hierarchy.
+    while (!bt.empty() && !tree_stack.empty()) {
+      const int tn = tree_stack.back();
+      tree_stack.pop_back();
+      const double tgap = (bt.center[tn] - t.group_center[g]).norm() - bt.radius[tn] - t.group_radius[g];
+      if (tgap > m.induction_near * bt.reach[tn] + near_reach) continue;
+      if (bt.child[tn] >= 0) {
+        tree_stack.push_back(bt.child[tn] + 1);
+        tree_stack.push_back(bt.child[tn]);
+        continue;
+      }
+      const int body = bt.body[tn];
+      if (body == own_body) continue;
       const Vec3 origin = s.body_pose[body].position;
       stack.assign(1, m.body_root[body]);
       while (!stack.empty()) {

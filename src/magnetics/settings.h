@@ -45,6 +45,10 @@ struct Settings {
   /// Right-precondition GMRES with the model's factored intra-body blocks (Model::precond_lu),
   /// when it has them. The answer is the same to induction_tolerance; iterations are fewer.
   bool induction_preconditioner = true;
+  /// Groups of bodies far apart interact as aggregates in the force walk (the hierarchy over
+  /// bodies, body_tree.h), opened at half of theta. false: every pair of bodies is walked at
+  /// the cell level, as before 2026-12-02 (N^2; for validation, not a scene key).
+  bool body_groups = true;
 };
 
 /// Outcome of the induced-magnetization solve.

@@ -9,6 +9,7 @@
 #include <span>
 #include <vector>
 
+#include "body_tree.h"
 #include "model.h"
 #include "settings.h"
 
@@ -109,6 +110,28 @@ struct State {
     std::unordered_map<std::int64_t, Mat3> tensor;  ///< (target cell, source cell) -> target body frame
   };
   std::map<std::pair<int, int>, PairTensors> cross_tensors;
+  /// (nbody) input, optional: 1 for a body that magnetic forces do not move (static or
+  /// kinematic). Forces between two such bodies that are purely permanent are computed once
+  /// per set of their poses (fixed_pairs); empty = no body is fixed.
+  std::vector<std::uint8_t> body_fixed;
+  /// The hierarchy over all bodies (world frame), rebuilt from the poses at every evaluation;
+  /// every walk (forces, induction, field) starts at its root.
+  BodyTree body_tree;
+  /// Cache: the mutual forces, torques (about each body's origin) and energy of the fixed,
+  /// purely permanent bodies, valid for the poses and force settings stored with it. Pairs of
+  /// them are skipped by the force walk while it is valid (accumulate_forces()).
+  struct FixedPairs {
+    bool valid = false;
+    std::vector<std::uint8_t> frozen;  ///< (nbody) the bodies it covers
+    std::vector<Pose> poses;           ///< their poses, in body order
+    double theta = 0, near_field = 0;
+    int near_field_order = 0;
+    KernelPrecision precision = KernelPrecision::kSingle;
+    std::vector<Vec3> force, torque;   ///< (nbody) N, N·m
+    double energy = 0;                 ///< J
+    std::int64_t near_pairs = 0;
+  };
+  mutable FixedPairs fixed_pairs;
   std::vector<Mat3> body_rotation;    ///< (nbody) rotation matrices
   std::vector<Mat3> part_rotation;    ///< (npart) part frame -> world
   // float copies for the single-precision block kernels: (ncell) each

@@ -37,6 +37,7 @@ void update_geometry(const Model& m, State& s) {
     s.permanent.cell[c] = R * m.cell_moment[c];
   });
   for (int n = 0; n < m.node_count(); ++n) s.node_offset[n] = s.body_rotation[m.node_body[n]] * m.node_center[n];
+  s.body_tree.build(m, s);
   s.permanent.aggregate(m);
 }
 }  // namespace

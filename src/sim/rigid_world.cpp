@@ -5,6 +5,7 @@
 #include <BulletCollision/CollisionDispatch/btInternalEdgeUtility.h>
 #include <HACD/hacdHACD.h>
 #include <btBulletDynamicsCommon.h>
+#include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -77,8 +78,38 @@ bool adjust_internal_edges(btManifoldPoint& cp, const btCollisionObjectWrapper* 
 class ContactWorld : public btDiscreteDynamicsWorld {
  public:
   ContactWorld(btDispatcher* d, btBroadphaseInterface* b, btConstraintSolver* s, btCollisionConfiguration* c,
-               const std::vector<bool>* magnetic)
-      : btDiscreteDynamicsWorld(d, b, s, c), magnetic_(magnetic) {}
+               const std::vector<bool>* magnetic, const std::vector<double>* aabb_pad)
+      : btDiscreteDynamicsWorld(d, b, s, c), magnetic_(magnetic), aabb_pad_(aabb_pad) {}
+
+  // Bullet pads every broadphase box by gContactBreakingThreshold, 2 cm, whatever the body's
+  // size: 2 mm spheres 8 mm apart then all overlapped each other up to 4.4 cm away, so the pair
+  // count (and the narrowphase work and memory) grew as N^2 (issue 13: 1.0 GB at N = 1000). Here
+  // each box is padded by its own body's pad (RigidWorld: at most 2 cm, half the body's smallest
+  // extent for small bodies), which still covers Bullet's contact-breaking distance (0.02 of a
+  // shape's size) and our contact skin; otherwise as btCollisionWorld::updateSingleAabb.
+  void updateAabbs() override {
+    for (int i = 0; i < m_collisionObjects.size(); ++i) {
+      btCollisionObject* o = m_collisionObjects[i];
+      if (!m_forceUpdateAllAabbs && !o->isActive()) continue;
+      const int body = o->getUserIndex();
+      const btScalar pad = body >= 0 ? btScalar((*aabb_pad_)[body]) : gContactBreakingThreshold;
+      const btVector3 grow(pad, pad, pad);
+      btVector3 lo, hi;
+      o->getCollisionShape()->getAabb(o->getWorldTransform(), lo, hi);
+      lo -= grow, hi += grow;
+      if (getDispatchInfo().m_useContinuous && o->getInternalType() == btCollisionObject::CO_RIGID_BODY &&
+          !o->isStaticOrKinematicObject()) {
+        btVector3 lo2, hi2;  // the box at the end of the step too (swept)
+        o->getCollisionShape()->getAabb(o->getInterpolationWorldTransform(), lo2, hi2);
+        lo.setMin(lo2 - grow), hi.setMax(hi2 + grow);
+      }
+      if (o->isStaticObject() || (hi - lo).length2() < btScalar(1e12)) {
+        m_broadphasePairCache->setAabb(o->getBroadphaseHandle(), lo, hi, m_dispatcher1);
+      } else {
+        o->setActivationState(DISABLE_SIMULATION);  // as Bullet does for a runaway body
+      }
+    }
+  }
 
   void solveConstraints(btContactSolverInfo& info) override {
     for (int k = 0; k < m_dispatcher1->getNumManifolds(); ++k) {
@@ -102,6 +133,7 @@ class ContactWorld : public btDiscreteDynamicsWorld {
 
  private:
   const std::vector<bool>* magnetic_;  // per body, owned by RigidWorld::Impl
+  const std::vector<double>* aabb_pad_;  // per body, m, owned by RigidWorld::Impl
 };
 
 }  // namespace
@@ -122,6 +154,11 @@ struct RigidWorld::Impl {
   std::vector<bool> magnetic;    // per body: has magnetic material
   std::vector<bool> permanent;   // per body: has permanently magnetized material
   std::vector<double> extent;    // per body: smallest bounding-box extent of its shape, m
+  std::vector<double> aabb_pad;  // per body: broadphase box padding, m (ContactWorld::updateAabbs)
+  // Bullet's dynamic-tree margin (the global gDbvtMargin, 5 cm by default: a proxy's tree box
+  // is that much larger than its AABB, and pairs live while tree boxes overlap). Set to this
+  // world's value before every Bullet call that runs the broadphase, since it is a global.
+  double dbvt_margin = 0.05;
   // Collision shapes shared by bodies of the same scene shape (Bullet allows sharing): a heap of
   // 50 identical meshes is decomposed into convex pieces once, not 50 times.
   std::map<std::tuple<const geometry::Shape*, bool, double>, btCollisionShape*> shared;
@@ -216,7 +253,7 @@ struct RigidWorld::Impl {
 
 RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>(scene)) {
   Impl& m = *impl_;
-  m.world = std::make_unique<ContactWorld>(&m.dispatcher, &m.broadphase, &m.solver, &m.config, &m.magnetic);
+  m.world = std::make_unique<ContactWorld>(&m.dispatcher, &m.broadphase, &m.solver, &m.config, &m.magnetic, &m.aabb_pad);
   gContactAddedCallback = adjust_internal_edges;
   m.dispatcher.registerCollisionCreateFunc(BOX_SHAPE_PROXYTYPE, BOX_SHAPE_PROXYTYPE, &m.box_box);
   m.dispatcher.registerCollisionCreateFunc(SPHERE_SHAPE_PROXYTYPE, SPHERE_SHAPE_PROXYTYPE, &m.sphere_sphere);
@@ -307,6 +344,8 @@ RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>
     for (const auto& p : b.parts) perm = perm || (p.material >= 0 && scene.materials[p.material].kind == magnetics::MaterialKind::kPermanent);
     m.permanent.push_back(perm);
     m.extent.push_back(extent);
+    m.aabb_pad.push_back(std::min<double>(gContactBreakingThreshold, 0.5 * extent));
+    if (dynamic) m.dbvt_margin = std::min(m.dbvt_margin, 0.25 * extent);
     m.world->addRigidBody(body.get());
     m.bodies.push_back(std::move(body));
   }
@@ -368,6 +407,7 @@ void RigidWorld::step(double t, double h, const std::vector<Vec3>& force, const 
       b->applyTorque(bt(torque[i]));
     }
   }
+  gDbvtMargin = m.dbvt_margin;
   m.world->stepSimulation(h, 0, h);
 }
 
@@ -450,6 +490,7 @@ std::vector<RigidWorld::Penetration> RigidWorld::separate_overlaps(double tolera
   Impl& m = *impl_;
   std::map<std::pair<int, int>, double> first;  // initial depth per pair
   for (int it = 0; it < max_iterations; ++it) {
+    gDbvtMargin = m.dbvt_margin;
     m.world->performDiscreteCollisionDetection();
     double worst = 0;
     for (int k = 0; k < m.dispatcher.getNumManifolds(); ++k) {

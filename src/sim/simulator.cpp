@@ -16,6 +16,12 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 Simulator::Simulator(const scene::Scene& scene, const magnetics::Model& model)
     : scene_(scene), model_(model), settings_(scene::magnetics_settings(scene)) {
   mag_state_.resize(model_);
+  // Static and kinematic bodies are not moved by magnetic forces: the magnetics computes their
+  // mutual forces once per set of their poses (a kinematic magnet at rest costs nothing).
+  mag_state_.body_fixed.assign(scene_.bodies.size(), 0);
+  for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
+    mag_state_.body_fixed[i] = scene_.bodies[i].motion != scene::Motion::kDynamic;
+  }
   world_ = std::make_unique<RigidWorld>(scene_);
   state_.resize(scene_.bodies.size());
   stiffness_length_.resize(scene_.bodies.size());

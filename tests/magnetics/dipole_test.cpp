@@ -161,8 +161,10 @@ TEST(DipolePipeline, SingleCellSpheresGiveExactDipoleForcesAndTorques) {
         EXPECT_NEAR(res.energy, ref.energy, tol * 10 * m1.norm() * dipole_field(r, m0).norm());
       }
     }
-    // Field of body 0 at points outside it: the exact dipole field plus body 1's.
+    // Field of body 0 at points outside it: the exact dipole field plus body 1's (theta 0: at
+    // any other theta, points far from both see the two bodies as one aggregate dipole).
     Settings st;
+    st.theta = 0.0;
     Result res;
     evaluate(s.model, st, s.state, res);
     for (int q = 0; q < 10; ++q) {

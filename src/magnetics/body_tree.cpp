@@ -1,0 +1,99 @@
+#include "body_tree.h"
+
+#include <algorithm>
+#include <cassert>
+#include <limits>
+
+#include "state.h"
+
+namespace magbake::magnetics {
+namespace {
+
+struct Builder {
+  const std::vector<Vec3>& c;  // root sphere centre per body (world)
+  const std::vector<double>& r;
+  const std::vector<double>& reach;
+  BodyTree& t;
+
+  // Node for order[b, e): returns its index; children are allocated as a pair.
+  void fill(int n, int b, int e) {
+    Box3 box;
+    for (int q = b; q < e; ++q) box.extend(c[t.order[q]]);
+    const Vec3 mid = box.center();
+    double rad = 0, rch = 0;
+    for (int q = b; q < e; ++q) {
+      const int body = t.order[q];
+      rad = std::max(rad, (c[body] - mid).norm() + r[body]);
+      rch = std::max(rch, reach[body]);
+    }
+    t.center[n] = mid, t.radius[n] = rad, t.reach[n] = rch, t.begin[n] = b, t.end[n] = e;
+    if (e - b == 1) {
+      t.body[n] = t.order[b];
+      t.leaf_of[t.order[b]] = n;
+      return;
+    }
+    int axis;
+    box.sizes().maxCoeff(&axis);
+    const int m = b + (e - b) / 2;
+    std::nth_element(t.order.begin() + b, t.order.begin() + m, t.order.begin() + e, [&](int x, int y) {
+      return c[x][axis] < c[y][axis] || (c[x][axis] == c[y][axis] && x < y);
+    });
+    const int k = t.node_count();
+    for (int i = 0; i < 2; ++i) {
+      t.child.push_back(-1), t.body.push_back(-1), t.begin.push_back(0), t.end.push_back(0);
+      t.parent.push_back(n), t.center.emplace_back(Vec3::Zero()), t.radius.push_back(0), t.reach.push_back(0);
+    }
+    t.child[n] = k;
+    fill(k, b, m);
+    fill(k + 1, m, e);
+  }
+};
+
+}  // namespace
+
+void BodyTree::build(const Model& m, const State& s, const std::function<bool(int)>& pick) {
+  child.clear(), body.clear(), begin.clear(), end.clear(), parent.clear();
+  center.clear(), radius.clear(), reach.clear(), order.clear();
+  leaf_of.assign(m.body_count, -1);
+  std::vector<Vec3> c(m.body_count, Vec3::Zero());
+  std::vector<double> r(m.body_count, 0.0), rch(m.body_count, 0.0);
+  for (int b = 0; b < m.body_count; ++b) {
+    const int root = m.body_root[b];
+    if (root < 0 || (pick && !pick(b))) continue;
+    order.push_back(b);
+    c[b] = s.body_pose[b].position + s.node_offset[root];
+    r[b] = m.node_radius[root];
+    rch[b] = m.node_reach[root];
+  }
+  if (order.empty()) return;
+  child.push_back(-1), body.push_back(-1), begin.push_back(0), end.push_back(0);
+  parent.push_back(-1), center.emplace_back(Vec3::Zero()), radius.push_back(0), reach.push_back(0);
+  Builder{c, r, rch, *this}.fill(0, 0, static_cast<int>(order.size()));
+}
+
+void BodyTreeSources::aggregate(const BodyTree& t, const Model& m, const Sources& src) {
+  const int nn = t.node_count();
+  moment.assign(nn, Vec3::Zero());
+  active.assign(nn, 0);
+  open_radius.assign(nn, 0.0);
+  std::vector<double> abs_sum(nn, 0.0);
+  // Children are created after their parents: a reverse sweep sums bottom-up.
+  for (int n = nn - 1; n >= 0; --n) {
+    if (t.child[n] < 0) {
+      const int root = m.body_root[t.body[n]];
+      moment[n] = src.node[root];
+      active[n] = src.node_active[root];
+      abs_sum[n] = moment[n].norm();
+      open_radius[n] = t.radius[n];
+    } else {
+      const int k = t.child[n];
+      moment[n] = moment[k] + moment[k + 1];
+      active[n] = active[k] || active[k + 1];
+      abs_sum[n] = abs_sum[k] + abs_sum[k + 1];
+      const double net = moment[n].norm();
+      open_radius[n] = net > 0.0 ? t.radius[n] * std::max(1.0, abs_sum[n] / net) : std::numeric_limits<double>::infinity();
+    }
+  }
+}
+
+}  // namespace magbake::magnetics
