@@ -17,7 +17,7 @@ struct FieldOptions {
   /// it (mu0 (H + M) inside): bounded inside magnets, where a point dipole is singular.
   bool smear_inside = false;
   /// Far and leaf dipoles in single precision (AVX2, 8 targets per instruction); near cells,
-  /// sums and everything else in double. Targets must not be cells (no self-exclusion).
+  /// sums and everything else in double. (Either way a target that is a cell skips itself.)
   bool single_precision = false;
 };
 
