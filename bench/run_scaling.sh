@@ -8,6 +8,8 @@
 #
 # Usage: bench/run_scaling.sh [BUILD] [OUT] [N ...]     (default: build bench/results/scaling 100 300 1000 3000 10000)
 #   FRAMES=1 (default) ms simulated per N; THREADS=2.
+#   BASELINE=path/to/other/magbake: also bakes each N up to BASELINE_MAX_N (default 1000) with
+#   that binary right after this build's bake (side by side, same load), rows marked "baseline".
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 build=${1:-build}
@@ -21,33 +23,36 @@ mkdir -p "$out"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 csv="$out/scaling.csv"
-echo "n,threads,substeps,magnetics_ms_per_substep,rigid_ms_per_substep,induction_iterations_per_substep,peak_rss_mb,wall_s" > "$csv"
+echo "build,n,threads,substeps,magnetics_ms_per_substep,rigid_ms_per_substep,induction_iterations_per_substep,peak_rss_mb,wall_s" > "$csv"
 {
   echo "date: $(date -u +%Y-%m-%dT%H:%MZ); commit $(git -C "$here/.." rev-parse --short HEAD)$(git -C "$here/.." diff --quiet || echo ' (with uncommitted changes)')"
   echo "cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores; load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 } > "$out/machine.txt"
 
-run() {  # n threads
-  local n=$1 t=$2
+run() {  # n threads [binary label]
+  local n=$1 t=$2 exe=${3:-$build/bake/magbake} label=${4:-this}
   python3 "$here/make_scaling_scene.py" "$tmp/s$n.yaml" "$n" "$frames"
   rm -rf "$tmp/o"
-  /usr/bin/time -f "%M %e" -o "$tmp/time" "$build/bake/magbake" -q --threads "$t" bake "$tmp/s$n.yaml" -o "$tmp/o" \
+  /usr/bin/time -f "%M %e" -o "$tmp/time" "$exe" -q --threads "$t" bake "$tmp/s$n.yaml" -o "$tmp/o" \
     > "$tmp/log" 2>&1 || { echo "bake of N=$n failed:"; tail -5 "$tmp/log"; exit 1; }
   read -r rss wall < "$tmp/time"
-  /usr/bin/python3 - "$tmp/o/scaling_$n.h5" "$n" "$t" "$rss" "$wall" >> "$csv" <<'PY'
+  /usr/bin/python3 - "$tmp/o/scaling_$n.h5" "$n" "$t" "$rss" "$wall" "$label" >> "$csv" <<'PY'
 import sys, h5py
-path, n, t, rss, wall = sys.argv[1:]
+path, n, t, rss, wall, label = sys.argv[1:]
 o = h5py.File(path, "r")["observables"]
 sub = o["substeps"]["value"][1:].sum()
 mag = o["magnetics_seconds"]["value"][1:].sum()
 rbd = o["rigid_seconds"]["value"][1:].sum()
 ind = o["induction_iterations"]["value"][1:].sum()
-print(f"{n},{t},{int(sub)},{1e3 * mag / sub:.3f},{1e3 * rbd / sub:.3f},{ind / sub:.2f},{int(rss) / 1024:.0f},{float(wall):.1f}")
+print(f"{label},{n},{t},{int(sub)},{1e3 * mag / sub:.3f},{1e3 * rbd / sub:.3f},{ind / sub:.2f},{int(rss) / 1024:.0f},{float(wall):.1f}")
 PY
   tail -1 "$csv"
 }
 
-for n in "${sizes[@]}"; do run "$n" "$threads"; done
+for n in "${sizes[@]}"; do
+  run "$n" "$threads"
+  if [ -n "${BASELINE:-}" ] && [ "$n" -le "${BASELINE_MAX_N:-1000}" ]; then run "$n" "$threads" "$BASELINE" baseline; fi
+done
 run 1000 1
 
 /usr/bin/python3 - "$csv" "$out" <<'PY'
@@ -57,8 +62,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 rows = list(csv.DictReader(open(sys.argv[1])))
 out = sys.argv[2]
-main = [r for r in rows if r["threads"] != "1"]
-one = [r for r in rows if r["threads"] == "1"]
+base = [r for r in rows if r["build"] == "baseline"]
+rows = [r for r in rows if r["build"] != "baseline"] + base
+main = [r for r in rows if r["threads"] != "1" and r["build"] != "baseline"]
+one = [r for r in rows if r["threads"] == "1" and r["build"] != "baseline"]
 def slope(key):
     pts = [(math.log(float(r["n"])), math.log(float(r[key]))) for r in main if float(r[key]) > 0]
     if len(pts) < 2: return float("nan")
@@ -66,10 +73,10 @@ def slope(key):
     return (y1 - y0) / (x1 - x0)
 with open(f"{out}/scaling.md", "w") as f:
     f.write(open(f"{out}/machine.txt").read() + "\n")
-    f.write("| N | threads | substeps | magnetics ms / substep | rigid ms / substep | induction iterations / substep | peak memory MB | wall s |\n")
-    f.write("| --- | --- | --- | --- | --- | --- | --- | --- |\n")
+    f.write("| build | N | threads | substeps | magnetics ms / substep | rigid ms / substep | induction iterations / substep | peak memory MB | wall s |\n")
+    f.write("| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n")
     for r in rows:
-        f.write(f"| {r['n']} | {r['threads']} | {r['substeps']} | {r['magnetics_ms_per_substep']} | {r['rigid_ms_per_substep']} | "
+        f.write(f"| {r['build']} | {r['n']} | {r['threads']} | {r['substeps']} | {r['magnetics_ms_per_substep']} | {r['rigid_ms_per_substep']} | "
                 f"{r['induction_iterations_per_substep']} | {r['peak_rss_mb']} | {r['wall_s']} |\n")
     f.write(f"\nExponent from the smallest to the largest N: magnetics N^{slope('magnetics_ms_per_substep'):.2f}, "
             f"rigid N^{slope('rigid_ms_per_substep'):.2f}, memory N^{slope('peak_rss_mb'):.2f}.\n")
@@ -83,6 +90,8 @@ fig, ax = plt.subplots(figsize=(6, 4.5))
 n = [float(r["n"]) for r in main]
 for key, label in (("magnetics_ms_per_substep", "magnetics"), ("rigid_ms_per_substep", "rigid (Bullet)"), ("peak_rss_mb", "peak memory (MB)")):
     ax.loglog(n, [float(r[key]) for r in main], "o-", label=label)
+    if base and key != "peak_rss_mb":
+        ax.loglog([float(r["n"]) for r in base], [float(r[key]) for r in base], "x--", label=label + ", baseline")
 ref = float(main[0]["magnetics_ms_per_substep"])
 ax.loglog(n, [ref * (x / n[0]) for x in n], "k:", lw=0.8, label="N^1")
 ax.loglog(n, [ref * (x / n[0]) ** 1.2 for x in n], "k--", lw=0.8, label="N^1.2")
