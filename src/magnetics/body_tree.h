@@ -47,10 +47,9 @@ struct BodyTree {
 /// radius (infinite when the sum vanishes: the group is always opened). For one body (a leaf)
 /// it is the body's radius, as in the cell hierarchy. Measured on 300 spheres, magnets in
 /// random directions and steel (BodyTree.ForcesOfManyBodiesMatchEveryCellPair, theta 0.5,
-/// rms force error against theta 0): plain radii and the full angle for groups gave 4.8%
-/// (1.6% with every body pair walked); this radius, with groups opened at half the angle in
-/// the force walk (forces.cpp), gives 1.31% (1.30% with every body pair walked), 0.13% rms
-/// from the every-body-pair result.
+/// rms force error against theta 0): plain radii and the full angle for groups gave 4.8%;
+/// this radius with groups opened at kGroupTheta in every walk gives 0.39% (0.37% when the
+/// force walk visits every body pair), 0.13% rms from the every-body-pair forces.
 struct BodyTreeSources {
   std::vector<Vec3> moment;
   std::vector<std::uint8_t> active;
@@ -58,6 +57,12 @@ struct BodyTreeSources {
   /// Sums src.node[root] of each body bottom-up.
   void aggregate(const BodyTree& tree, const Model& model, const Sources& src);
 };
+
+/// Opening angle of groups of bodies (inner nodes of the tree), in units of Settings::theta.
+/// A member's share of a group interaction is evaluated at its group's centre, and a dipole's
+/// force falls as d^-4, so a displacement r changes it by about 4 r / d where the aggregate's
+/// field changes by r / d (forces.cpp has the measurements).
+constexpr double kGroupTheta = 0.5;
 
 /// The opening test shared by every walk: two spheres (centres d apart, radii ra and rb, cell
 /// reaches summed in `reach`) interact as aggregates when their opening radii (oa, ob: the

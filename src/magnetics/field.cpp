@@ -273,7 +273,11 @@ std::int64_t field_at_targets(const Model& m, const State& s, const Sources& src
       if (!agg.active[tn]) continue;
       const double td = (bt.center[tn] - gc).norm();
       if (bt.child[tn] >= 0 || bt.body[tn] < 0) {
-        if (well_separated(td, bt.radius[tn], gr, agg.open_radius[tn], gr, opt.theta, opt.near_field, 2.0 * bt.reach[tn])) {
+        // Groups open at kGroupTheta * theta, as in the force walk: at the full angle their
+        // error slowed the induction's GMRES (100 spheres: 27 iterations in 9 substeps instead
+        // of 18).
+        if (well_separated(td, bt.radius[tn], gr, agg.open_radius[tn], gr, kGroupTheta * opt.theta, opt.near_field,
+                           2.0 * bt.reach[tn])) {
           far.push_back({bt.center[tn] - gc, agg.moment[tn]});
         } else {
           tree_stack.push_back(bt.child[tn] + 1);

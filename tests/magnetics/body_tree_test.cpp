@@ -108,7 +108,7 @@ TEST(BodyTree, ForcesOfManyBodiesMatchEveryCellPair) {
               vs_pairs, worst_groups, vs_exact, worst_exact, rms_error(all, ref), (long long)r.stats.node_pairs,
               (long long)all.stats.node_pairs);
   EXPECT_LT(vs_pairs, 0.01);
-  EXPECT_LT(vs_exact, 0.02);
+  EXPECT_LT(vs_exact, 0.01);
   EXPECT_LT(r.stats.node_pairs, all.stats.node_pairs);
   const Sums sm = sums(s, r);
   EXPECT_LT(sm.force.norm(), 1e-12 * sm.fmax * s.model.body_count);
