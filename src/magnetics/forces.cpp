@@ -340,7 +340,8 @@ void accumulate_forces(const Model& m, const Settings& st, const State& s, Resul
                             return x.position == y.position && x.rotation.coeffs() == y.rotation.coeffs();
                           });
   const bool same_settings = cache.theta == st.theta && cache.near_field == st.near_field &&
-                             cache.near_field_order == st.near_field_order && cache.precision == st.precision;
+                             cache.near_field_order == st.near_field_order && cache.precision == st.precision &&
+                             cache.body_groups == st.body_groups;
   if (!cache.valid || !same_poses || !same_settings) {
     Result own;
     own.force.assign(m.body_count, Vec3::Zero());
@@ -349,8 +350,8 @@ void accumulate_forces(const Model& m, const Settings& st, const State& s, Resul
     res.stats.body_pairs += own.stats.body_pairs;  // work of this evaluation
     res.stats.node_pairs += own.stats.node_pairs;
     res.stats.cell_pairs += own.stats.cell_pairs;
-    cache = State::FixedPairs{true, frozen, poses, st.theta, st.near_field, st.near_field_order, st.precision,
-                              own.force, own.torque, own.energy, own.stats.near_pairs};
+    cache = State::FixedPairs{true,     frozen,     poses,     st.theta,   st.near_field, st.near_field_order,
+                              st.precision, st.body_groups, own.force, own.torque, own.energy,  own.stats.near_pairs};
   }
   for (int b = 0; b < m.body_count; ++b) {
     if (!frozen[b]) continue;

@@ -127,6 +127,7 @@ struct State {
     double theta = 0, near_field = 0;
     int near_field_order = 0;
     KernelPrecision precision = KernelPrecision::kSingle;
+    bool body_groups = true;
     std::vector<Vec3> force, torque;   ///< (nbody) N, N·m
     double energy = 0;                 ///< J
     std::int64_t near_pairs = 0;
