@@ -8,7 +8,8 @@ desk toy) on a table, as a falling heap and as a resting lattice.
   lattice: a 6 x 6 x 6 block of touching balls, chains along x magnetized +x and -x in a
            checkerboard (each chain's neighbours antiparallel), resting on the table.
 
-Usage: make_zen_magnets.py OUT_DIR [frames]   (writes OUT_DIR/zen_heap.yaml, OUT_DIR/zen_lattice.yaml)
+Usage: make_zen_magnets.py OUT_DIR [frames [sleep]]   (writes OUT_DIR/zen_heap.yaml, OUT_DIR/zen_lattice.yaml)
+  sleep: time.sleep in seconds (0 = no body sleeps); absent = the scene default.
 """
 import math
 import os
@@ -17,6 +18,7 @@ import sys
 
 out_dir = sys.argv[1]
 frames = int(sys.argv[2]) if len(sys.argv) > 2 else 10
+sleep = f", sleep: {float(sys.argv[3])}" if len(sys.argv) > 3 else ""
 os.makedirs(out_dir, exist_ok=True)
 R = 2.5  # mm
 
@@ -27,7 +29,7 @@ def header(name, what):
         "magbake: 1",
         f"name: {name}",
         "units: {length: mm, angle: deg}",
-        f"time: {{fps: 50, frames: [1, {frames + 1}], dt: 0.001}}",
+        f"time: {{fps: 50, frames: [1, {frames + 1}], dt: 0.001{sleep}}}",
         "gravity: [0, 0, -9810]",
         "materials:",
         "  N42:  {kind: permanent, remanence: 1.3, density: 7500}",

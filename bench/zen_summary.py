@@ -25,12 +25,16 @@ for arg in sys.argv[3:]:
         else:
             e = o["kinetic_energy/value"][()] + o["magnetic_energy/value"][()] + o["gravity_energy/value"][()]
             drift = e[1:] - e[:-1]
+        sleeping = o["sleeping/value"][1:] if "sleeping" in o else [0]
     wall = [m + r for m, r in zip(mag, rig)]
     rows.append({
         "run": label,
         "frames": len(sub),
         "substeps_per_frame": statistics.median(sub),
         "wall_s_per_frame": statistics.median(wall),
+        "mean_wall_s_per_frame": sum(wall) / len(wall),
+        "total_wall_s": sum(wall),
+        "asleep_at_end": int(sleeping[-1]),
         "magnetics_s_per_frame": statistics.median(mag),
         "rigid_s_per_frame": statistics.median(rig),
         "max_penetration_mm": 1e3 * max(pen),
@@ -42,10 +46,11 @@ with open(sys.argv[1], "w") as f:
     for r in rows:
         f.write(",".join(str(r[k]) for k in keys) + "\n")
 with open(sys.argv[2], "w") as f:
-    f.write("| run | frames | substeps per frame | wall s per frame | magnetics s | rigid s | deepest penetration mm | largest energy rise per frame J |\n")
-    f.write("|---|---|---|---|---|---|---|---|\n")
+    f.write("| run | frames | substeps per frame | wall s per frame (median) | mean | total s | asleep at end | magnetics s | rigid s | deepest penetration mm | largest energy rise per frame J |\n")
+    f.write("|---|---|---|---|---|---|---|---|---|---|---|\n")
     for r in rows:
         f.write(f"| {r['run']} | {r['frames']} | {r['substeps_per_frame']:.0f} | {r['wall_s_per_frame']:.3g} | "
+                f"{r['mean_wall_s_per_frame']:.3g} | {r['total_wall_s']:.4g} | {r['asleep_at_end']} | "
                 f"{r['magnetics_s_per_frame']:.3g} | {r['rigid_s_per_frame']:.3g} | {r['max_penetration_mm']:.3f} | "
                 f"{r['largest_energy_rise_J']:.2e} |\n")
 print(open(sys.argv[2]).read())

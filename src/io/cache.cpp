@@ -23,14 +23,21 @@ struct Series {
 };
 constexpr Series kBodySeries[] = {
     {"position", 3, "m"},        {"orientation", 4, ""},          {"velocity", 3, "m s-1"},
-    {"angular_velocity", 3, "s-1"}, {"magnetic_force", 3, "kg m s-2"}, {"magnetic_torque", 3, "kg m2 s-2"}};
+    {"angular_velocity", 3, "s-1"}, {"magnetic_force", 3, "kg m s-2"}, {"magnetic_torque", 3, "kg m2 s-2"},
+    // Sleeping (sim::SimState): state (0 awake, 1 resting, 2 asleep) and seconds at rest; the
+    // magnetic force and torque a sleeping body fell asleep with. Optional for readers (caches
+    // before them have neither: every body awake).
+    {"sleep", 2, ""}, {"sleep_reference", 6, ""}};
+constexpr std::size_t kRequiredBodySeries = 6;  // the rest are optional when read
 constexpr Series kObservables[] = {{"kinetic_energy", 1, "kg m2 s-2"},      {"gravity_energy", 1, "kg m2 s-2"},
                                    {"magnetic_energy", 1, "kg m2 s-2"},     {"momentum", 3, "kg m s-1"},
                                    {"angular_momentum", 3, "kg m2 s-1"},    {"magnetics_seconds", 1, "s"},
                                    {"rigid_seconds", 1, "s"},               {"cells_visited", 1, ""},
                                    {"induction_iterations", 1, ""},         {"induction_residual", 1, ""},
                                    {"substeps", 1, ""},                     {"energy_drift", 1, "kg m2 s-2"},
-                                   {"max_speed", 1, "m s-1"},               {"max_penetration", 1, "m"}};
+                                   {"max_speed", 1, "m s-1"},               {"max_penetration", 1, "m"},
+                                   {"sleeping", 1, ""}};
+constexpr std::size_t kRequiredObservables = 14;  // "sleeping" is optional when read
 
 std::vector<double> flat(const std::vector<Vec3>& v) {
   std::vector<double> out;
@@ -99,6 +106,7 @@ CacheWriter::CacheWriter(const std::string& path, const scene::Scene& sc, const 
     h5::attr_int(p.id(), "first_frame", {sc.first_frame});
     h5::attr_int(p.id(), "last_frame", {sc.last_frame});
     h5::attr_double(p.id(), "dt", {sc.dt});
+    h5::attr_double(p.id(), "sleep_time", {sc.sleep_time});  // s, 0 = no body sleeps
     h5::attr_double(p.id(), "gravity", {sc.gravity[0], sc.gravity[1], sc.gravity[2]});
     const auto& mg = sc.magnetics;
     h5::attr_string(p.id(), "quality", mg.quality);
@@ -287,8 +295,15 @@ void CacheWriter::append(int frame, double time, const sim::SimState& s, const s
     const Quat& q = s.orientation[i];
     ori.insert(ori.end(), {q.w(), q.x(), q.y(), q.z()});
   }
+  std::vector<double> sleep(2 * n, 0.0), reference(6 * n, 0.0);
+  for (std::size_t i = 0; i < n && i < s.sleep.size(); ++i) {
+    sleep[2 * i] = s.sleep[i];
+    sleep[2 * i + 1] = s.rest_time[i];
+    for (int c = 0; c < 3; ++c) reference[6 * i + c] = s.sleep_force[i][c], reference[6 * i + 3 + c] = s.sleep_torque[i][c];
+  }
   const std::vector<double> rows[] = {pos, ori, flat(s.velocity), flat(s.angular_velocity), flat(s.magnetic_force),
-                                      flat(s.magnetic_torque)};
+                                      flat(s.magnetic_torque), sleep, reference};
+  static_assert(std::size(rows) == std::size(kBodySeries));
   for (std::size_t k = 0; k < m.body_series.size(); ++k) {
     h5::write_row(m.body_series[k].id(), H5T_NATIVE_DOUBLE, row, rows[k].data());
   }
@@ -305,7 +320,9 @@ void CacheWriter::append(int frame, double time, const sim::SimState& s, const s
                            {double(d.substeps)},
                            {d.energy_drift},
                            {d.max_speed},
-                           {d.max_penetration}};
+                           {d.max_penetration},
+                           {double(d.sleeping)}};
+  static_assert(std::size(obs) == std::size(kObservables));
   for (std::size_t k = 0; k < m.observables.size(); ++k) {
     h5::write_row(m.observables[k].id(), H5T_NATIVE_DOUBLE, row, obs[k]);
   }
@@ -326,7 +343,16 @@ void CacheWriter::append(int frame, double time, const sim::SimState& s, const s
 
 void CacheWriter::copy_frames_from(const CacheReader& from, int count) {
   Impl& m = *impl_;
-  auto copy = [&](const std::string& path, hid_t dataset, hid_t type) {
+  auto copy = [&](const std::string& path, hid_t dataset, hid_t type, bool optional = false) {
+    if (optional && !h5::exists(from.file(), path)) {
+      // A cache from before this series: zeros (every body awake, nothing asleep).
+      const std::vector<hsize_t> shape = h5::shape(dataset);
+      std::size_t row = 1;
+      for (std::size_t k = 1; k < shape.size(); ++k) row *= shape[k];
+      const std::vector<double> zeros(row, 0.0);
+      for (int f = 0; f < count; ++f) h5::write_row(dataset, type, f, zeros.data());
+      return;
+    }
     h5::Handle src(h5::check_id(H5Dopen2(from.file(), path.c_str(), H5P_DEFAULT), "open " + path));
     const std::vector<hsize_t> shape = h5::shape(src.id());
     std::size_t row = 1;
@@ -343,10 +369,12 @@ void CacheWriter::copy_frames_from(const CacheReader& from, int count) {
     }
   };
   for (std::size_t k = 0; k < m.body_series.size(); ++k) {
-    copy(std::string("particles/bodies/") + kBodySeries[k].name + "/value", m.body_series[k].id(), H5T_NATIVE_DOUBLE);
+    copy(std::string("particles/bodies/") + kBodySeries[k].name + "/value", m.body_series[k].id(), H5T_NATIVE_DOUBLE,
+         k >= kRequiredBodySeries);
   }
   for (std::size_t k = 0; k < m.observables.size(); ++k) {
-    copy(std::string("observables/") + kObservables[k].name + "/value", m.observables[k].id(), H5T_NATIVE_DOUBLE);
+    copy(std::string("observables/") + kObservables[k].name + "/value", m.observables[k].id(), H5T_NATIVE_DOUBLE,
+         k >= kRequiredObservables);
   }
   if (m.ninduced > 0) copy("magnetics/induced_moment/value", m.induced.id(), H5T_NATIVE_DOUBLE);
   copy("frames/step", m.step.id(), H5T_NATIVE_INT64);
@@ -461,6 +489,10 @@ CacheFrame CacheReader::frame(int index) const {
   fr.torque = vecs("magnetic_torque");
   const std::vector<double> q = h5::read_rows(f, "particles/bodies/orientation/value", index, 1);
   for (std::size_t i = 0; i + 3 < q.size(); i += 4) fr.orientation.emplace_back(q[i], q[i + 1], q[i + 2], q[i + 3]);
+  if (layout_.sleep) {
+    fr.sleep = h5::read_rows(f, "particles/bodies/sleep/value", index, 1);
+    fr.sleep_reference = h5::read_rows(f, "particles/bodies/sleep_reference/value", index, 1);
+  }
   if (layout_.induced > 0) {
     const std::vector<double> v = h5::read_rows(f, "magnetics/induced_moment/value", index, 1);
     for (std::size_t i = 0; i + 2 < v.size(); i += 3) fr.induced_moment.emplace_back(v[i], v[i + 1], v[i + 2]);
@@ -500,6 +532,22 @@ sim::SimState CacheReader::sim_state(int index, const scene::Scene& sc) const {
     s.magnetic_torque[i] = fr.torque[i];
   }
   s.induced_moment = fr.induced_moment;
+  for (std::size_t i = 0; i < sc.bodies.size() && 2 * i + 1 < fr.sleep.size(); ++i) {
+    const double state = fr.sleep[2 * i], rest = fr.sleep[2 * i + 1];
+    if (!(state == 0 || state == 1 || state == 2) || !(rest >= 0 && rest < 1e12)) {
+      throw std::runtime_error(path_ + ": frame " + std::to_string(fr.frame) + " holds an invalid sleep state of body '" +
+                               sc.bodies[i].name + "'");
+    }
+    s.sleep[i] = static_cast<std::uint8_t>(state);
+    s.rest_time[i] = rest;
+    const double* r = fr.sleep_reference.data() + 6 * i;
+    s.sleep_force[i] = Vec3(r[0], r[1], r[2]);
+    s.sleep_torque[i] = Vec3(r[3], r[4], r[5]);
+    if (!s.sleep_force[i].allFinite() || !s.sleep_torque[i].allFinite()) {
+      throw std::runtime_error(path_ + ": frame " + std::to_string(fr.frame) + " holds a non-finite sleep reference of body '" +
+                               sc.bodies[i].name + "'");
+    }
+  }
   return s;
 }
 

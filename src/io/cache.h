@@ -56,6 +56,9 @@ struct CacheFrame {
   std::vector<Quat> orientation;       ///< body -> world
   std::vector<Vec3> velocity, angular_velocity, force, torque;
   std::vector<Vec3> induced_moment;    ///< world, A·m², Model::induced_cells order
+  /// (nbody x 2) sleep state and seconds at rest, (nbody x 6) wake-up reference force (N) and
+  /// torque (N·m); empty for caches written before sleeping (sim::SimState).
+  std::vector<double> sleep, sleep_reference;
 };
 
 /// The render geometry of a cache: every body's shape and parts as triangle meshes in the body

@@ -184,6 +184,13 @@ CacheLayout check_cache_layout(hid_t f, std::int64_t frames_done) {
   }
   series("particles/bodies/orientation/value", {n, 4});
   if (L.induced > 0) series("magnetics/induced_moment/value", {L.induced, 3});
+  // Optional (caches written before sleeping lack them): both or neither.
+  const bool has_sleep = h5::exists(f, "particles/bodies/sleep/value");
+  if (has_sleep || h5::exists(f, "particles/bodies/sleep_reference/value")) {
+    series("particles/bodies/sleep/value", {n, 2});
+    series("particles/bodies/sleep_reference/value", {n, 6});
+    L.sleep = true;
+  }
   frames = std::min<std::int64_t>(frames, std::numeric_limits<int>::max());
   if (frames > 0) {
     const std::vector<double> step = h5::read_rows(f, "frames/step", 0, hsize_t(frames));

@@ -18,6 +18,7 @@ struct CacheLayout {
   std::size_t cells = 0;      ///< magnetic cells
   std::size_t parts = 0;      ///< magnetic parts
   std::size_t induced = 0;    ///< induced cells (rows of /magnetics/induced_cells)
+  bool sleep = false;         ///< the optional sleep series are present (with the right shapes)
   int frames = 0;             ///< complete frames readable in every per-frame series
 };
 

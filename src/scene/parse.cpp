@@ -258,10 +258,11 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
   }
   if (const YAML::Node t = c["time"]; t.IsDefined()) {
     s.time_loc = loc_of(t);
-    if (r.mapping(t, "time", {"fps", "frames", "dt"}, {}, s.time_loc)) {
+    if (r.mapping(t, "time", {"fps", "frames", "dt", "sleep"}, {}, s.time_loc)) {
       s.fps = r.number(t, "fps", "time");
       s.frames = r.vector(t, "frames", "time", 2);
       s.dt = r.number(t, "dt", "time");
+      s.sleep = r.number(t, "sleep", "time");
     }
   }
   s.gravity = r.vector(c, "gravity", "", 3);

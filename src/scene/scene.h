@@ -131,6 +131,10 @@ struct Scene {
   double fps = 30;
   int first_frame = 1, last_frame = 120;
   double dt = 1.0 / 600.0;  ///< physics substep, s
+  /// Seconds a dynamic body must stay at rest (with its island of touching bodies) before it
+  /// sleeps: it is no longer stepped, and its magnetic forces come from cached pairs until a
+  /// contact or a change of its magnetic force wakes it (sim::Simulator). 0 = no body sleeps.
+  double sleep_time = 0.5;
   Vec3 gravity{0, 0, -9.81};
   MagneticsSettings magnetics;
   std::vector<Material> materials;

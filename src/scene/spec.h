@@ -94,7 +94,7 @@ struct SceneSpec {
   Loc units_loc;
   Val<std::string> length_unit, angle_unit;
   Loc time_loc;
-  Val<double> fps, dt;
+  Val<double> fps, dt, sleep;
   Val<Vec> frames;
   Val<Vec> gravity;
   Loc magnetics_loc;

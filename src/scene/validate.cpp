@@ -425,6 +425,13 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       sc.dt = s.dt.v;
     }
   }
+  if (s.sleep.set) {
+    if (!(s.sleep.v >= 0 && s.sleep.v <= 1e6)) {
+      d.add(s.sleep.loc, "time.sleep", "seconds at rest before a body sleeps: from 0 (never) to 1000000");
+    } else {
+      sc.sleep_time = s.sleep.v;
+    }
+  }
   if (s.gravity.set && within(c, s.gravity, "gravity", kMaxAcceleration, c.L, "m/s²")) sc.gravity = vec3(s.gravity, c.L);
 
   // Magnetics settings and presets.

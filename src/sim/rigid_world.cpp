@@ -159,6 +159,9 @@ struct RigidWorld::Impl {
   // is that much larger than its AABB, and pairs live while tree boxes overlap). Set to this
   // world's value before every Bullet call that runs the broadphase, since it is a global.
   double dbvt_margin = 0.05;
+  // Scene::sleep_time: Bullet's global gDeactivationTime (how long a body must be below its sleep
+  // speeds), set before every step like gDbvtMargin; 0 = no dynamic body sleeps.
+  double sleep_time = 0;
   // Collision shapes shared by bodies of the same scene shape (Bullet allows sharing): a heap of
   // 50 identical meshes is decomposed into convex pieces once, not 50 times.
   std::map<std::tuple<const geometry::Shape*, bool, double>, btCollisionShape*> shared;
@@ -253,6 +256,7 @@ struct RigidWorld::Impl {
 
 RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>(scene)) {
   Impl& m = *impl_;
+  m.sleep_time = scene.sleep_time;
   m.world = std::make_unique<ContactWorld>(&m.dispatcher, &m.broadphase, &m.solver, &m.config, &m.magnetic, &m.aabb_pad);
   gContactAddedCallback = adjust_internal_edges;
   m.dispatcher.registerCollisionCreateFunc(BOX_SHAPE_PROXYTYPE, BOX_SHAPE_PROXYTYPE, &m.box_box);
@@ -273,12 +277,6 @@ RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>
   m.principal.resize(scene.bodies.size(), Mat3::Identity());
   m.origin.resize(scene.bodies.size(), Vec3::Zero());
 
-  const bool any_magnetic = [&] {
-    for (const auto& b : scene.bodies) {
-      if (b.magnetic(scene.materials)) return true;
-    }
-    return false;
-  }();
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
     const scene::Body& b = scene.bodies[i];
     const bool dynamic = b.motion == scene::Motion::kDynamic;
@@ -327,10 +325,14 @@ RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>
     } else if (b.motion == scene::Motion::kStatic) {
       body->setCollisionFlags(body->getCollisionFlags() | btCollisionObject::CF_STATIC_OBJECT);
     } else {
-      // Magnetic forces act at a distance: magnetic bodies never sleep (a sleeping body
-      // ignores applied forces). Others may, with thresholds for cm-scale motion.
-      if (any_magnetic && b.magnetic(scene.materials)) body->setActivationState(DISABLE_DEACTIVATION);
-      body->setSleepingThresholds(0.005, 0.05);
+      // Sleeping (Scene::sleep_time): a sleeping body ignores applied forces, so the simulator
+      // wakes a magnetic body when its magnetic force changes (Simulator::update_sleep). Sleep
+      // speeds: 5 mm/s, or a tenth of the body's smallest extent per second if smaller, and the
+      // spin that moves its surface that fast (at least 0.05 rad/s): a magnet chain resting on a
+      // table chatters at 0.005-0.05 rad/s, 30-60 µm/s (5 mm balls, dt 1 ms).
+      if (scene.sleep_time <= 0) body->setActivationState(DISABLE_DEACTIVATION);
+      const double sleep_speed = std::min(0.005, 0.1 * extent);
+      body->setSleepingThresholds(sleep_speed, std::max(0.05, 2 * sleep_speed / extent));
       // Continuous collision for small fast bodies.
       body->setCcdMotionThreshold(0.5 * extent);
       body->setCcdSweptSphereRadius(0.4 * extent);
@@ -367,6 +369,11 @@ void RigidWorld::set_state(const SimState& s) {
       // Bullet's origin is the centre of mass for dynamic bodies.
       b->setLinearVelocity(bt(s.velocity[i]));
       b->setAngularVelocity(bt(s.angular_velocity[i]));
+      if (m.sleep_time > 0 && i < s.sleep.size()) {
+        static constexpr int kBullet[] = {ACTIVE_TAG, WANTS_DEACTIVATION, ISLAND_SLEEPING};
+        b->forceActivationState(kBullet[std::min<int>(s.sleep[i], 2)]);
+        b->setDeactivationTime(btScalar(s.rest_time[i]));
+      }
     } else {
       b->setLinearVelocity(btVector3(0, 0, 0));
       b->setAngularVelocity(btVector3(0, 0, 0));
@@ -389,7 +396,27 @@ void RigidWorld::get_state(SimState& s) const {
     s.com_position[i] = com_world;
     s.angular_velocity[i] = w;
     s.velocity[i] = eig(b->getLinearVelocity()) + w.cross(com_world - eig(tr.getOrigin()));
+    if (i < s.sleep.size()) {
+      const bool dynamic = m.scene.bodies[i].motion == scene::Motion::kDynamic;
+      const int a = dynamic ? b->getActivationState() : ACTIVE_TAG;  // Bullet's static bodies "sleep"
+      s.sleep[i] = a == ISLAND_SLEEPING ? kAsleep : a == WANTS_DEACTIVATION ? kResting : kAwake;
+      s.rest_time[i] = m.sleep_time > 0 && m.scene.bodies[i].motion == scene::Motion::kDynamic ? b->getDeactivationTime() : 0.0;
+    }
   }
+}
+
+bool RigidWorld::asleep(int i) const { return impl_->bodies[i]->getActivationState() == ISLAND_SLEEPING; }
+
+void RigidWorld::wake(int i) {
+  btRigidBody* b = impl_->bodies[i].get();
+  if (b->getActivationState() == ISLAND_SLEEPING || b->getActivationState() == WANTS_DEACTIVATION) b->activate(true);
+}
+
+void RigidWorld::keep_awake(int i) {
+  btRigidBody* b = impl_->bodies[i].get();
+  if (b->getActivationState() == DISABLE_DEACTIVATION || b->isStaticOrKinematicObject()) return;
+  if (b->getActivationState() != ACTIVE_TAG) b->activate(true);
+  b->setDeactivationTime(0);
 }
 
 void RigidWorld::step(double t, double h, const std::vector<Vec3>& force, const std::vector<Vec3>& torque) {
@@ -408,6 +435,7 @@ void RigidWorld::step(double t, double h, const std::vector<Vec3>& force, const 
     }
   }
   gDbvtMargin = m.dbvt_margin;
+  if (m.sleep_time > 0) gDeactivationTime = btScalar(m.sleep_time);
   m.world->stepSimulation(h, 0, h);
 }
 

@@ -50,6 +50,15 @@ class RigidWorld {
   /// Returns the pairs that overlapped by more than `tolerance` before, deepest first.
   std::vector<Penetration> separate_overlaps(double tolerance, int max_iterations = 200);
 
+  /// Sleeping (Scene::sleep_time > 0; get_state/set_state carry it as SimState::sleep and
+  /// rest_time). Whether body i sleeps (is not stepped) now.
+  bool asleep(int i) const;
+  /// Wakes body i if it sleeps or waits to; the rest of its island wakes at the next step.
+  void wake(int i);
+  /// Restarts body i's rest clock (it is moving or not balanced, so it must not fall asleep);
+  /// wakes it if it waits to sleep. No effect on static, kinematic or never-sleeping bodies.
+  void keep_awake(int i);
+
   /// Bullet's version, e.g. "3.24".
   static std::string bullet_version();
 

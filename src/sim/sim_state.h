@@ -1,6 +1,7 @@
 // SimState: everything that changes during a bake, as flat arrays per body (index = scene body).
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "magnetics/types.h"
@@ -10,6 +11,13 @@ namespace magbake::sim {
 using magnetics::Mat3;
 using magnetics::Quat;
 using magnetics::Vec3;
+
+/// Where a body is on its way to sleep (Bullet's activation states, in our numbering).
+enum SleepState : std::uint8_t {
+  kAwake = 0,    ///< stepped; at rest for rest_time s so far
+  kResting = 1,  ///< at rest for sleep_time s, waiting for the rest of its island
+  kAsleep = 2,   ///< not stepped; woken by a contact or a change of its magnetic force
+};
 
 /// State of every body at one instant. Poses are of the centre-of-mass frame with the body's
 /// own axes (scene body frame shifted to the centre of mass), world frame.
@@ -22,6 +30,12 @@ struct SimState {
   std::vector<Vec3> magnetic_force;      ///< (nbody x 3) last substep's, N
   std::vector<Vec3> magnetic_torque;     ///< (nbody x 3) last substep's, about the COM, N·m
   std::vector<Vec3> induced_moment;      ///< (ninduced x 3) world, A·m² (Model::induced_cells order)
+  // Sleeping (Scene::sleep_time; saved in the cache so that a resumed bake sleeps as the
+  // uninterrupted one does). Static and kinematic bodies stay kAwake with rest_time 0.
+  std::vector<std::uint8_t> sleep;       ///< (nbody) a SleepState
+  std::vector<double> rest_time;         ///< (nbody) s the body has been below its sleep speeds
+  std::vector<Vec3> sleep_force;         ///< (nbody x 3) magnetic force when it fell asleep, N (wake-up reference)
+  std::vector<Vec3> sleep_torque;        ///< (nbody x 3) magnetic torque then, N·m
 
   void resize(std::size_t nbody) {
     com_position.assign(nbody, Vec3::Zero());
@@ -30,6 +44,10 @@ struct SimState {
     angular_velocity.assign(nbody, Vec3::Zero());
     magnetic_force.assign(nbody, Vec3::Zero());
     magnetic_torque.assign(nbody, Vec3::Zero());
+    sleep.assign(nbody, 0);
+    rest_time.assign(nbody, 0.0);
+    sleep_force.assign(nbody, Vec3::Zero());
+    sleep_torque.assign(nbody, Vec3::Zero());
   }
 };
 
@@ -58,6 +76,8 @@ struct FrameDiagnostics {
   int max_speed_body = -1;           ///< that body (scene index), -1 if none
   double max_penetration = 0;        ///< deepest contact penetration over the frame's substeps, m
   int penetration_a = -1, penetration_b = -1;  ///< the two bodies of that contact (-1 if none)
+  int sleeping = 0;                  ///< bodies asleep at the frame (Scene::sleep_time)
+  int wake_ups = 0;                  ///< sleeping bodies woken by a change of their magnetic force
 
   /// Kinetic + gravity + magnetic energy, J.
   double total_energy() const { return kinetic_energy + gravity_energy + magnetic_energy; }

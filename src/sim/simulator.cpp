@@ -28,6 +28,16 @@ Simulator::Simulator(const scene::Scene& scene, const magnetics::Model& model)
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     stiffness_length_[i] = 0.25 * scene_.bodies[i].shape.shape->bounds().sizes().minCoeff();
   }
+  // Sleeping: a sleeping body wakes when its magnetic force changes by more than would give it
+  // 1% of gravity's acceleration (at least 0.01 m/s², for scenes without gravity), or its torque
+  // by that force at half its smallest extent.
+  sleep_ = scene_.sleep_time > 0;
+  wake_force_.resize(scene_.bodies.size());
+  wake_torque_.resize(scene_.bodies.size());
+  for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
+    wake_force_[i] = scene_.bodies[i].mass * 0.01 * std::max(scene_.gravity.norm(), 1.0);
+    wake_torque_[i] = wake_force_[i] * 2.0 * stiffness_length_[i];
+  }
   contact_exempt_.assign(scene_.bodies.size(), 0);
   for (std::size_t i = 0; i < scene_.bodies.size() && i < model_.body_isotropic.size(); ++i) {
     contact_exempt_[i] = scene_.bodies[i].motion == scene::Motion::kDynamic && model_.body_isotropic[i];
@@ -53,6 +63,7 @@ void Simulator::initialize() {
   initial_overlaps_ = world_->separate_overlaps(0.5 * kOverlapTolerance);
   std::erase_if(initial_overlaps_, [](const RigidWorld::Penetration& p) { return p.depth <= kOverlapTolerance; });
   world_->get_state(state_);
+  sleep_reference_set_.assign(scene_.bodies.size(), 0);
   frame_ = scene_.first_frame;
   FrameDiagnostics d;
   evaluate_magnetics(d);  // forces of the first frame (reported in the cache)
@@ -61,7 +72,15 @@ void Simulator::initialize() {
 
 void Simulator::restore(const SimState& s, int frame) {
   state_ = s;
+  if (state_.sleep.size() != scene_.bodies.size()) {  // a state without sleep data: every body awake
+    state_.sleep.assign(scene_.bodies.size(), kAwake);
+    state_.rest_time.assign(scene_.bodies.size(), 0.0);
+    state_.sleep_force.assign(scene_.bodies.size(), Vec3::Zero());
+    state_.sleep_torque.assign(scene_.bodies.size(), Vec3::Zero());
+  }
   world_->set_state(state_);
+  sleep_reference_set_.assign(scene_.bodies.size(), 0);
+  for (std::size_t i = 0; i < state_.sleep.size(); ++i) sleep_reference_set_[i] = state_.sleep[i] == kAsleep;
   frame_ = frame;
   if (state_.induced_moment.size() == model_.induced_cells.size()) mag_state_.induced_moment = state_.induced_moment;
   FrameDiagnostics d;
@@ -73,6 +92,8 @@ void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
   const auto t0 = Clock::now();
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     mag_state_.body_pose[i] = magnetics::Pose{state_.orientation[i], state_.com_position[i]};
+    // Sleeping bodies do not move: their mutual forces come from the fixed-pairs cache.
+    mag_state_.body_fixed[i] = scene_.bodies[i].motion != scene::Motion::kDynamic || state_.sleep[i] == kAsleep;
   }
   magnetics::evaluate(model_, settings_, mag_state_, mag_result_);
   state_.magnetic_force = mag_result_.force;
@@ -89,6 +110,41 @@ void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
   d.magnetic_energy = mag_result_.energy;
 }
 
+void Simulator::update_sleep(FrameDiagnostics& d) {
+  if (!sleep_) return;
+  world_->contact_normals(contact_normals_);
+  bool woke = false;
+  for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
+    const scene::Body& b = scene_.bodies[i];
+    if (b.motion != scene::Motion::kDynamic) continue;
+    const Vec3& f = state_.magnetic_force[i];
+    const Vec3& tq = state_.magnetic_torque[i];
+    if (state_.sleep[i] == kAsleep) {
+      if (!sleep_reference_set_[i]) {
+        // First evaluation since it fell asleep (with it among the fixed bodies): the reference.
+        state_.sleep_force[i] = f, state_.sleep_torque[i] = tq;
+        sleep_reference_set_[i] = 1;
+      } else if ((f - state_.sleep_force[i]).norm() > wake_force_[i] ||
+                 (tq - state_.sleep_torque[i]).norm() > wake_torque_[i]) {
+        world_->wake(static_cast<int>(i));
+        state_.sleep[i] = kAwake, state_.rest_time[i] = 0;
+        state_.sleep_force[i] = state_.sleep_torque[i] = Vec3::Zero();
+        sleep_reference_set_[i] = 0;
+        woke = true;
+        ++d.wake_ups;
+      }
+    } else if (contact_normals_[i].empty() &&
+               ((f + b.mass * scene_.gravity).norm() > wake_force_[i] || tq.norm() > wake_torque_[i])) {
+      // Free and pushed: moving slowly is not being at rest.
+      world_->keep_awake(static_cast<int>(i));
+      state_.sleep[i] = kAwake, state_.rest_time[i] = 0;
+    }
+  }
+  // Forces of the state as it now is (the woken bodies no longer fixed), so that a bake resumed
+  // from this state recomputes them bit for bit. Wake-ups are rare.
+  if (woke) evaluate_magnetics(d);
+}
+
 int Simulator::substep_split(double h) const {
   // Magnetic stiffness: h sqrt(k/m) <= 0.5 with k = 4|F|/l, l = a quarter of the body's
   // smallest extent (at most 64 pieces). For most bodies |F| includes the pull that a contact
@@ -101,7 +157,7 @@ int Simulator::substep_split(double h) const {
   int split = 1;
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     const scene::Body& b = scene_.bodies[i];
-    if (b.motion != scene::Motion::kDynamic || b.mass <= 0) continue;
+    if (b.motion != scene::Motion::kDynamic || b.mass <= 0 || state_.sleep[i] == kAsleep) continue;
     Vec3 free = state_.magnetic_force[i];
     if (contact_exempt_[i]) {
       for (const Vec3& n : contact_normals_[i]) {
@@ -153,7 +209,10 @@ FrameDiagnostics Simulator::advance_frame() {
     double done = 0;
     bool first = true;
     while (h - done > 1e-12 * h) {
-      if (!first || k > 0) evaluate_magnetics(d);  // the first substep reuses the frame's forces
+      if (!first || k > 0) {  // the first substep reuses the frame's forces
+        evaluate_magnetics(d);
+        update_sleep(d);
+      }
       first = false;
       // Piece length the current state needs, then equal pieces over what is left of h.
       const double target = h / substep_split(h);
@@ -166,6 +225,11 @@ FrameDiagnostics Simulator::advance_frame() {
       const auto tr = Clock::now();
       world_->step(t, hs, state_.magnetic_force, state_.magnetic_torque);
       world_->get_state(state_);
+      if (sleep_) {
+        for (std::size_t i = 0; i < state_.sleep.size(); ++i) {
+          if (state_.sleep[i] != kAsleep) sleep_reference_set_[i] = 0;
+        }
+      }
       const RigidWorld::Penetration pen = world_->deepest_penetration();
       if (pen.depth > d.max_penetration) d.max_penetration = pen.depth, d.penetration_a = pen.a, d.penetration_b = pen.b;
       d.rigid_seconds += seconds_since(tr);
@@ -178,7 +242,9 @@ FrameDiagnostics Simulator::advance_frame() {
   frame_ = next;
   // Forces at the new frame's poses (reported with the frame, reused by the next substep).
   evaluate_magnetics(d);
+  update_sleep(d);
   check_finite(next);
+  for (std::uint8_t z : state_.sleep) d.sleeping += z == kAsleep;
   const FrameDiagnostics m = measure();
   d.kinetic_energy = m.kinetic_energy;
   d.gravity_energy = m.gravity_energy;

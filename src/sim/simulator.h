@@ -37,7 +37,10 @@ class NumericalFault : public std::runtime_error {
 ///     two bodies about to touch close by more than 1% of their size per piece; the split is
 ///     re-decided after every piece;
 ///  3. Bullet advances one substep with kinematic bodies moved to their keyed pose at t + h;
-///  4. NaN/Inf anywhere stops with a NumericalFault naming the body and frame.
+///  4. NaN/Inf anywhere stops with a NumericalFault naming the body and frame;
+///  5. bodies at rest for Scene::sleep_time fall asleep (Bullet islands); they count as fixed in
+///     the magnetics and do not split substeps, and wake on contact or when their magnetic force
+///     or torque changes (update_sleep).
 class Simulator {
  public:
   /// `model` must be built from the same scene (scene::build_magnetics_model).
@@ -72,6 +75,11 @@ class Simulator {
 
  private:
   void evaluate_magnetics(FrameDiagnostics& d);
+  /// Sleeping, after a magnetics evaluation: a sleeping body whose magnetic force or torque has
+  /// changed from the one it fell asleep with (by wake_force_/wake_torque_) is woken; a body
+  /// without contacts whose net force or torque is not negligible has its rest clock restarted
+  /// (slow is not balanced). Forces are re-evaluated when a body woke.
+  void update_sleep(FrameDiagnostics& d);
   /// Number of equal pieces a step of h seconds needs from the current state (>= 1).
   int substep_split(double h) const;
   void check_finite(int frame) const;
@@ -89,6 +97,10 @@ class Simulator {
   bool any_contact_exempt_ = false;
   mutable std::vector<std::vector<Vec3>> contact_normals_;  // per body, scratch of substep_split()
   std::vector<RigidWorld::Penetration> initial_overlaps_;
+  bool sleep_ = false;                    // Scene::sleep_time > 0
+  std::vector<double> wake_force_;        // per body, N: force change that wakes it
+  std::vector<double> wake_torque_;       // per body, N·m
+  std::vector<std::uint8_t> sleep_reference_set_;  // per body: asleep and its reference taken
   double last_energy_ = 0;  // total energy at the current frame, J (for energy_drift)
   StateHook after_magnetics_;
 };

@@ -197,7 +197,9 @@ TEST(Commands, CheckJsonEstimatesTheBake) {
   EXPECT_EQ(e["nominal_steps"], 5963);
   EXPECT_EQ(e["trial_steps"], 5963);  // the whole shot: counts are then the bake's own
   EXPECT_GE(e["substeps"].get<double>(), 5963);
-  EXPECT_DOUBLE_EQ(e["evaluations"].get<double>(), e["substeps"].get<double>());
+  // One evaluation per substep, plus one after each wake-up of a sleeping body (a handful).
+  EXPECT_GE(e["evaluations"].get<double>(), e["substeps"].get<double>());
+  EXPECT_LE(e["evaluations"].get<double>(), e["substeps"].get<double>() + 20);
   EXPECT_GT(e["induction_iterations"].get<double>(), 0);
   EXPECT_GT(e["seconds"].get<double>(), 0);
   const Outcome none = magbake("check " + scene("demo.yaml") + " --json --trial 0");

@@ -125,6 +125,14 @@ TEST(SceneValidation, FramesReversedAndBadSubstep) {
   EXPECT_TRUE(has(problems(kHead + "time: {fps: 24, dt: 0.1}\n"), 3, 21, "must not exceed the frame interval"));
 }
 
+TEST(SceneValidation, SleepTimeIsSecondsFromZero) {
+  EXPECT_TRUE(has(problems(kHead + "time: {fps: 24, sleep: -1}\n"), 3, 24, "seconds at rest before a body sleeps"));
+  EXPECT_TRUE(has(problems(kHead + "time: {fps: 24, sleep: .nan}\n"), 3, 24, "expected a number"));
+  EXPECT_TRUE(has(problems(kHead + "time: {fps: 24, sleep: 1e9}\n"), 3, 24, "seconds at rest"));
+  EXPECT_DOUBLE_EQ(load_scene_text(kHead + "time: {sleep: 0}\n", "t.yaml").sleep_time, 0.0);
+  EXPECT_DOUBLE_EQ(load_scene_text(kHead, "t.yaml").sleep_time, 0.5);
+}
+
 TEST(SceneValidation, UnsupportedVersion) {
   EXPECT_TRUE(has(problems("magbake: 2\nunits: {length: m, angle: rad}\n"), 1, 10, "unsupported scene format version 2"));
 }
