@@ -262,12 +262,12 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
       return;
     }
     z.resize(3 * n);
-    parallel_for_each(static_cast<int>(m.precond_lu.size()), 1, [&](int k) {
+    parallel_for_each(static_cast<int>(m.precond_factor.size()), 1, [&](int k) {
       const int r0 = m.precond_begin[k], nb = m.precond_begin[k + 1] - r0;
       const Mat3& R = s.body_rotation[m.cell_body[m.induced_cells[r0]]];
       Eigen::VectorXd local(3 * nb);
       for (int a = 0; a < nb; ++a) local.segment<3>(3 * a) = R.transpose() * v.segment<3>(3 * q_of_rank[r0 + a]);
-      local = m.precond_lu[k].solve(local);
+      local = m.precond_lu[m.precond_factor[k]].solve(local);
       for (int a = 0; a < nb; ++a) z.segment<3>(3 * q_of_rank[r0 + a]) = R * local.segment<3>(3 * a);
     });
   };

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
 
 #include "cuboid.h"
 #include "parallel.h"
@@ -126,6 +129,7 @@ void build_induction_model(Model& m, const std::vector<const Solid*>& part_solid
   // patterns), which these blocks hold exactly; what couples blocks is left to GMRES.
   m.precond_begin.assign(1, 0);
   m.precond_lu.clear();
+  m.precond_factor.clear();
   if (settings.induction_block <= 0) return;
   for (int r = 0; r < nind;) {
     const int b = m.cell_body[m.induced_cells[r]];
@@ -136,14 +140,14 @@ void build_induction_model(Model& m, const std::vector<const Solid*>& part_solid
     r = end;
   }
   const int nblock = static_cast<int>(m.precond_begin.size()) - 1;
-  m.precond_lu.resize(nblock);
   // Eigen blocks its dense products (inside the LU) by the CPU's cache sizes, read with cpuid:
   // the summation order, and so the rounding of every induced moment, would depend on the
   // machine (the same binary baked different caches on an Intel and an AMD VM). Fixed sizes
   // make the factors a function of the model alone (Determinism.ResultsDoNotDependOnTheMachines
   // CacheSizes). The values are typical of current x86 cores; speed hardly depends on them.
   Eigen::setCpuCacheSizes(32 * 1024, 512 * 1024, 8 * 1024 * 1024);
-  parallel_for_each(nblock, 1, [&](int k) {
+  // The operator of block k, body frame: a pure function of the model.
+  auto block_matrix = [&](int k) {
     const int r0 = m.precond_begin[k], n = m.precond_begin[k + 1] - r0;
     Eigen::MatrixXd A = Eigen::MatrixXd::Identity(3 * n, 3 * n);
     for (int a = 0; a < n; ++a) {
@@ -163,8 +167,47 @@ void build_induction_model(Model& m, const std::vector<const Solid*>& part_solid
         A.block<3, 3>(3 * a, 3 * c) -= P * m.near_tensor[e];
       }
     }
-    m.precond_lu[k].compute(A);
+    return A;
+  };
+  // Blocks with equal operators (bodies of one shape, material and cell layout) share one
+  // factorization: at 3000 bodies, half of them steel balls, the per-block matrices and factors
+  // took 445 MB. Found by a hash of the matrix and confirmed by comparing the matrices, so
+  // sharing never changes a result; the first block of each distinct operator is factored
+  // (deterministic for any thread count).
+  std::vector<std::uint64_t> hash(nblock);
+  parallel_for_each(nblock, 1, [&](int k) {
+    const Eigen::MatrixXd A = block_matrix(k);
+    std::uint64_t h = 1469598103934665603ull ^ static_cast<std::uint64_t>(A.rows());
+    const auto* bytes = reinterpret_cast<const unsigned char*>(A.data());
+    const std::size_t nbytes = sizeof(double) * static_cast<std::size_t>(A.size());
+    for (std::size_t i = 0; i < nbytes; ++i) h = (h ^ bytes[i]) * 1099511628211ull;  // FNV-1a
+    hash[k] = h;
   });
+  std::vector<int> candidate(nblock, -1);  // the first earlier block with the same hash
+  {
+    std::unordered_map<std::uint64_t, int> first;
+    for (int k = 0; k < nblock; ++k) {
+      const auto [it, fresh] = first.emplace(hash[k], k);
+      if (!fresh) candidate[k] = it->second;
+    }
+  }
+  std::vector<std::uint8_t> same(nblock, 0);
+  parallel_for_each(nblock, 1, [&](int k) {
+    if (candidate[k] >= 0) same[k] = block_matrix(k) == block_matrix(candidate[k]);
+  });
+  m.precond_factor.assign(nblock, -1);
+  std::vector<int> factored;  // the block of each factorization
+  for (int k = 0; k < nblock; ++k) {
+    if (same[k]) {
+      m.precond_factor[k] = m.precond_factor[candidate[k]];
+    } else {
+      m.precond_factor[k] = static_cast<int>(factored.size());
+      factored.push_back(k);
+    }
+  }
+  m.precond_lu.resize(factored.size());
+  parallel_for_each(static_cast<int>(factored.size()), 1,
+                    [&](int f) { m.precond_lu[f].compute(block_matrix(factored[f])); });
 }
 
 }  // namespace magbake::magnetics

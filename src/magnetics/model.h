@@ -107,10 +107,13 @@ struct Model {
   std::vector<Mat3> near_tensor;         ///< T/(A·m²), body frame
 
   // ---- induction preconditioner (rigid, so factored once): block k covers the induced ranks
-  // [precond_begin[k], precond_begin[k+1]) of one body; precond_lu[k] factors that block of the
-  // coupled operator I - P/mu0 (T_dipole + near rows) in the body frame (3 rows per cell).
+  // [precond_begin[k], precond_begin[k+1]) of one body; precond_lu[precond_factor[k]] factors
+  // that block of the coupled operator I - P/mu0 (T_dipole + near rows) in the body frame (3 rows
+  // per cell). Blocks with equal operators (bodies of one shape, material and cell layout) share
+  // one factorization.
   std::vector<int> precond_begin;        ///< (nblock + 1) induced ranks
-  std::vector<Eigen::PartialPivLU<Eigen::MatrixXd>> precond_lu;  ///< (nblock)
+  std::vector<int> precond_factor;       ///< (nblock) index into precond_lu
+  std::vector<Eigen::PartialPivLU<Eigen::MatrixXd>> precond_lu;  ///< (distinct blocks)
 
   // ---- hierarchy nodes (nnode); children of node n are node_child[n] .. + node_nchild[n] - 1
   std::vector<int> node_begin, node_end; ///< (nnode) cell range

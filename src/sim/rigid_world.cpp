@@ -348,6 +348,11 @@ RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>
     m.extent.push_back(extent);
     m.aabb_pad.push_back(std::min<double>(gContactBreakingThreshold, 0.5 * extent));
     if (dynamic) m.dbvt_margin = std::min(m.dbvt_margin, 0.25 * extent);
+    // At its initial pose before it enters the broadphase: added at the origin, every body's box
+    // overlapped every other's and Bullet stored all N^2/2 pairs until the first step (268 MB of
+    // pair cache at 3000 bodies, measured with heaptrack).
+    const magnetics::Pose p0 = b.pose_at(0.0);
+    body->setWorldTransform(m.bullet_transform(int(i), p0.rotation, p0.position + p0.rotation * b.com));
     m.world->addRigidBody(body.get());
     m.bodies.push_back(std::move(body));
   }
