@@ -1,6 +1,7 @@
 #include "simulator.h"
 
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -63,6 +64,7 @@ void Simulator::initialize() {
   initial_overlaps_ = world_->separate_overlaps(0.5 * kOverlapTolerance);
   std::erase_if(initial_overlaps_, [](const RigidWorld::Penetration& p) { return p.depth <= kOverlapTolerance; });
   world_->get_state(state_);
+  refresh_contacts();
   sleep_reference_set_.assign(scene_.bodies.size(), 0);
   frame_ = scene_.first_frame;
   FrameDiagnostics d;
@@ -72,13 +74,9 @@ void Simulator::initialize() {
 
 void Simulator::restore(const SimState& s, int frame) {
   state_ = s;
-  if (state_.sleep.size() != scene_.bodies.size()) {  // a state without sleep data: every body awake
-    state_.sleep.assign(scene_.bodies.size(), kAwake);
-    state_.rest_time.assign(scene_.bodies.size(), 0.0);
-    state_.sleep_force.assign(scene_.bodies.size(), Vec3::Zero());
-    state_.sleep_torque.assign(scene_.bodies.size(), Vec3::Zero());
-  }
+  assert(state_.sleep.size() == scene_.bodies.size());  // SimState::resize sizes it (all awake)
   world_->set_state(state_);
+  refresh_contacts();
   sleep_reference_set_.assign(scene_.bodies.size(), 0);
   for (std::size_t i = 0; i < state_.sleep.size(); ++i) sleep_reference_set_[i] = state_.sleep[i] == kAsleep;
   frame_ = frame;
@@ -110,9 +108,12 @@ void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
   d.magnetic_energy = mag_result_.energy;
 }
 
+void Simulator::refresh_contacts() {
+  if (sleep_ || any_contact_exempt_) world_->contact_normals(contact_normals_);
+}
+
 void Simulator::update_sleep(FrameDiagnostics& d) {
   if (!sleep_) return;
-  world_->contact_normals(contact_normals_);
   bool woke = false;
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     const scene::Body& b = scene_.bodies[i];
@@ -153,7 +154,6 @@ int Simulator::substep_split(double h) const {
   // is explicit too. A body with no magnetic torque (a soft sphere, Model::body_isotropic) has
   // no rotational stiffness, and the part of its pull that presses it into a contact is held by
   // that contact, so only the rest of its force (the part that can move it) counts.
-  if (any_contact_exempt_) world_->contact_normals(contact_normals_);
   int split = 1;
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     const scene::Body& b = scene_.bodies[i];
@@ -225,6 +225,7 @@ FrameDiagnostics Simulator::advance_frame() {
       const auto tr = Clock::now();
       world_->step(t, hs, state_.magnetic_force, state_.magnetic_torque);
       world_->get_state(state_);
+      refresh_contacts();
       if (sleep_) {
         for (std::size_t i = 0; i < state_.sleep.size(); ++i) {
           if (state_.sleep[i] != kAsleep) sleep_reference_set_[i] = 0;

@@ -75,6 +75,10 @@ class Simulator {
 
  private:
   void evaluate_magnetics(FrameDiagnostics& d);
+  /// Gathers the contact normals of Bullet's last collision detection into contact_normals_
+  /// (once per step; read by update_sleep and substep_split) when sleeping or a contact-exempt
+  /// body needs them.
+  void refresh_contacts();
   /// Sleeping, after a magnetics evaluation: a sleeping body whose magnetic force or torque has
   /// changed from the one it fell asleep with (by wake_force_/wake_torque_) is woken; a body
   /// without contacts whose net force or torque is not negligible has its rest clock restarted
@@ -95,7 +99,7 @@ class Simulator {
   std::vector<double> stiffness_length_;  // per body, m
   std::vector<std::uint8_t> contact_exempt_;  // per body: dynamic and without magnetic torque (substep_split)
   bool any_contact_exempt_ = false;
-  mutable std::vector<std::vector<Vec3>> contact_normals_;  // per body, scratch of substep_split()
+  std::vector<std::vector<Vec3>> contact_normals_;  // per body, of the last step (refresh_contacts())
   std::vector<RigidWorld::Penetration> initial_overlaps_;
   bool sleep_ = false;                    // Scene::sleep_time > 0
   std::vector<double> wake_force_;        // per body, N: force change that wakes it
