@@ -22,7 +22,7 @@ packages=(
   # disk-full test (loop-mounted ext2 image)
   e2fsprogs util-linux
   # fuzzing (libFuzzer comes with Debian's clang) and the sanitizer build
-  clang
+  clang libclang-rt-dev
   # the same binary baked on emulated Intel and AMD CPUs (Bake.SameCacheOnEmulatedIntelAndAmdCpus)
   qemu-user binutils
 )
