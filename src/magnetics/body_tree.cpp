@@ -71,6 +71,21 @@ void BodyTree::build(const Model& m, const State& s, const std::function<bool(in
   Builder{c, r, rch, *this}.fill(0, 0, static_cast<int>(order.size()));
 }
 
+void BodyTree::build_over(const std::vector<Vec3>& c, const std::vector<double>& r) {
+  assert(c.size() == r.size());
+  child.clear(), body.clear(), begin.clear(), end.clear(), parent.clear();
+  center.clear(), radius.clear(), reach.clear();
+  const int n = static_cast<int>(c.size());
+  leaf_of.assign(n, -1);
+  order.resize(n);
+  for (int i = 0; i < n; ++i) order[i] = i;
+  if (n == 0) return;
+  const std::vector<double> rch(n, 0.0);
+  child.push_back(-1), body.push_back(-1), begin.push_back(0), end.push_back(0);
+  parent.push_back(-1), center.emplace_back(Vec3::Zero()), radius.push_back(0), reach.push_back(0);
+  Builder{c, r, rch, *this}.fill(0, 0, n);
+}
+
 void BodyTreeSources::aggregate(const BodyTree& t, const Model& m, const Sources& src) {
   const int nn = t.node_count();
   moment.assign(nn, Vec3::Zero());

@@ -35,6 +35,9 @@ struct BodyTree {
   /// Rebuilds the tree from the bodies' current root spheres (s.body_pose, s.node_offset):
   /// every body with cells, or those for which pick(body) is true.
   void build(const Model& model, const State& s, const std::function<bool(int)>& pick = {});
+  /// The same tree over arbitrary spheres (centres c, radii r, world, m; reach 0): leaf n holds
+  /// item body[n]. The field walk's hierarchy over target groups.
+  void build_over(const std::vector<Vec3>& c, const std::vector<double>& r);
 };
 
 /// Per tree node: the summed moment of a source set (world, A·m²), whether it is non-zero, and
@@ -63,6 +66,11 @@ struct BodyTreeSources {
 /// force falls as d^-4, so a displacement r changes it by about 4 r / d where the aggregate's
 /// field changes by r / d (forces.cpp has the measurements).
 constexpr double kGroupTheta = 0.5;
+
+/// Largest radius of a group of targets, in units of Settings::theta times the distance, that
+/// takes a far group's field as a second-order local expansion about its centre (field.cpp):
+/// the expansion's relative error grows as about 10 (r/d)^3.
+constexpr double kLocalTheta = 0.5;
 
 /// The opening test shared by every walk: two spheres (centres d apart, radii ra and rb, cell
 /// reaches summed in `reach`) interact as aggregates when their opening radii (oa, ob: the

@@ -4,8 +4,10 @@
 #include <cassert>
 #include <numeric>
 
+#include "body_tree.h"
 #include "cuboid.h"
 #include "dipole.h"
+#include "local_expansion.h"
 #include "parallel.h"
 #include "simd_rsqrt.h"
 
@@ -126,12 +128,6 @@ void Targets::update_induced_positions(const Model& m, const State& s) {
 
 namespace {
 
-// Work stack of the body-tree walk, one per thread (no allocation once grown).
-std::vector<int>& thread_local_stack() {
-  thread_local std::vector<int> stack;
-  return stack;
-}
-
 // A dipole source for one target group: position relative to the group centre (m), moment.
 struct Source {
   Vec3 x, m;
@@ -238,134 +234,268 @@ void dipoles_f32(const std::vector<Source>& src, const std::vector<Vec3>& rel, i
 
 }  // namespace
 
-std::int64_t field_at_targets(const Model& m, const State& s, const Sources& src, const Targets& t,
-                              const FieldOptions& opt, std::span<Vec3> B) {
-  const int ngroup = static_cast<int>(t.group_begin.size()) - 1;
-  assert(B.size() == t.position.size());
-  std::vector<std::int64_t> work(std::max(ngroup, 0), 0);
+namespace {
 
-  const BodyTree& bt = s.body_tree;
-  if (bt.empty()) {
-    std::fill(B.begin(), B.end(), Vec3::Zero());
-    return 0;
+// Independent pieces of the walk: subtrees of the target hierarchy, found by splitting every
+// inner node level by level until there are at least kTasks (a count fixed by the tree alone,
+// so the result does not depend on the number of threads).
+constexpr int kTasks = 64;
+
+// Fewest target groups under a node of the target hierarchy for which a far group's field is
+// taken as a local expansion (below, each group sums the far aggregate at its own targets).
+// Measured on 1000 spheres (bench/README.md, "Dual field walk"): 8, 4 and 2 cost the same
+// within 2%.
+constexpr int kLocalGroups = 4;
+
+std::vector<int> task_roots(const BodyTree& tt) {
+  std::vector<int> roots{0};
+  while (static_cast<int>(roots.size()) < kTasks) {
+    std::vector<int> next;
+    for (int n : roots) {
+      if (tt.child[n] < 0) {
+        next.push_back(n);
+      } else {
+        next.push_back(tt.child[n]);
+        next.push_back(tt.child[n] + 1);
+      }
+    }
+    if (next.size() == roots.size()) break;
+    roots.swap(next);
   }
+  return roots;
+}
+
+// Position (world, m) and moment of a far source of a group.
+inline Source far_source(const FieldPlan::Far& f, const Model& m, const State& s, const Sources& src,
+                         const BodyTreeSources& agg, const Vec3& gc) {
+  switch (f.kind) {
+    case FieldPlan::kBodyNode:
+      return {s.body_tree.center[f.index] - gc, agg.moment[f.index]};
+    case FieldPlan::kCellNode:
+      return {s.body_pose[m.node_body[f.index]].position + s.node_offset[f.index] - gc, src.node[f.index]};
+    default:
+      return {s.body_pose[m.cell_body[f.index]].position + s.cell_offset[f.index] - gc, src.cell[f.index]};
+  }
+}
+
+}  // namespace
+
+FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const Targets& t, const FieldOptions& opt) {
+  FieldPlan plan;
+  const int ngroup = static_cast<int>(t.group_begin.size()) - 1;
+  const BodyTree& bt = s.body_tree;
+  plan.far_begin.assign(std::max(ngroup, 0) + 1, 0);
+  plan.near_begin.assign(std::max(ngroup, 0) + 1, 0);
+  if (bt.empty() || ngroup <= 0) return plan;
   BodyTreeSources agg;
   agg.aggregate(bt, m, src);
-  parallel_for_each(ngroup, 1, [&](int g) {
-    const int tb = t.group_begin[g], te = t.group_begin[g + 1];
-    for (int q = tb; q < te; ++q) B[q] = Vec3::Zero();
-    const Vec3 gc = t.group_center[g];
-    const double gr = t.group_radius[g];
-    std::int64_t count = 0;
-    thread_local std::vector<Source> far;   // dipoles evaluated for every target of the group
-    thread_local std::vector<int> near;     // cells decided target by target
-    thread_local std::vector<Vec3> rel;
-    far.clear();
-    near.clear();
-    int stack[128];
-    // The hierarchy over bodies first: a group of bodies far enough away is one dipole at its
-    // centre; a body that is not opens into its own cell hierarchy.
-    std::vector<int>& tree_stack = thread_local_stack();
-    tree_stack.assign(1, 0);
-    while (!tree_stack.empty()) {
-      const int tn = tree_stack.back();
-      tree_stack.pop_back();
-      if (!agg.active[tn]) continue;
-      const double td = (bt.center[tn] - gc).norm();
-      if (bt.child[tn] >= 0 || bt.body[tn] < 0) {
-        // Groups open at kGroupTheta * theta, as in the force walk: at the full angle their
-        // error slowed the induction's GMRES (100 spheres: 27 iterations in 9 substeps instead
-        // of 18).
-        if (well_separated(td, bt.radius[tn], gr, agg.open_radius[tn], gr, kGroupTheta * opt.theta, opt.near_field,
-                           2.0 * bt.reach[tn])) {
-          far.push_back({bt.center[tn] - gc, agg.moment[tn]});
-        } else {
-          tree_stack.push_back(bt.child[tn] + 1);
-          tree_stack.push_back(bt.child[tn]);
+  BodyTree& tt = plan.target_tree;
+  tt.build_over(t.group_center, t.group_radius);
+  plan.roots = task_roots(tt);
+  const int ntask = static_cast<int>(plan.roots.size());
+
+  // The dual walk, per subtree of targets: a group of sources far from a group of targets adds
+  // its summed dipole's second-order local expansion at the targets' centre (handed down to every
+  // target below); a few target groups take the far aggregate at each target; a target group
+  // next to a body walks that body's cells.
+  std::vector<std::vector<std::pair<int, int>>> locals(ntask);
+  std::vector<std::vector<int>> near_bodies(ngroup);  // per group, in walk order: bodies (>= 0), far nodes (~node)
+  std::vector<std::vector<FieldPlan::Far>> far(ngroup);
+  std::vector<std::vector<int>> near(ngroup);
+  parallel_for_each(ntask, 1, [&](int k) {
+    std::vector<std::pair<int, int>> stack{{plan.roots[k], 0}};
+    while (!stack.empty()) {
+      const auto [x, y] = stack.back();
+      stack.pop_back();
+      if (!agg.active[y]) continue;
+      const double d = (tt.center[x] - bt.center[y]).norm(), rx = tt.radius[x];
+      // Groups of bodies open at kGroupTheta * theta, as in the force walk (at the full angle
+      // their error slowed the induction's GMRES); a body at theta, as its own root cell.
+      const double theta = bt.child[y] < 0 ? opt.theta : kGroupTheta * opt.theta;
+      const bool gap = d - bt.radius[y] - rx > opt.near_field * 2.0 * bt.reach[y];
+      if (tt.end[x] - tt.begin[x] < kLocalGroups) {
+        // Few targets: the aggregate at each of them costs less than an expansion.
+        if (gap && agg.open_radius[y] + rx < theta * d) {
+          for (int q = tt.begin[x]; q < tt.end[x]; ++q) near_bodies[tt.order[q]].push_back(~y);
+          continue;
         }
+      } else if (gap && agg.open_radius[y] < theta * (d - rx) && rx < kLocalTheta * opt.theta * d) {
+        // The aggregate's error at the nearest target as above; the expansion's own ~10 (rx/d)^3.
+        locals[k].emplace_back(x, y);
         continue;
       }
-      const int body = bt.body[tn];
-      const int root = m.body_root[body];
-      const Vec3 origin = s.body_pose[body].position;
-      int top = 0;
-      stack[top++] = root;
-      while (top > 0) {
-        const int n = stack[--top];
-        if (!src.node_active[n]) continue;
-        const Vec3 nc = origin + s.node_offset[n];
-        const double d = (nc - gc).norm();
-        const double rn = m.node_radius[n];
-        const double near_margin = opt.near_field * 2.0 * m.node_reach[n];
-        if (rn + gr < opt.theta * d && d - rn - gr > near_margin) {
-          far.push_back({nc - gc, src.node[n]});  // the node acts as one dipole at its centre
+      const int cx = tt.child[x], cy = bt.child[y];
+      if (cx < 0 && cy < 0) {
+        near_bodies[tt.body[x]].push_back(bt.body[y]);
+      } else if (cy < 0 || (cx >= 0 && tt.radius[x] >= bt.radius[y])) {
+        stack.emplace_back(cx + 1, y);
+        stack.emplace_back(cx, y);
+      } else {
+        stack.emplace_back(x, cy + 1);
+        stack.emplace_back(x, cy);
+      }
+    }
+    // Each group of the subtree against the cell hierarchies of its near bodies: far cell nodes
+    // and plain cells are dipoles summed at every target, cells near a target are decided target
+    // by target.
+    for (int q = tt.begin[plan.roots[k]]; q < tt.end[plan.roots[k]]; ++q) {
+      const int g = tt.order[q];
+      const int tb = t.group_begin[g];
+      const Vec3 gc = t.group_center[g];
+      const double gr = t.group_radius[g];
+      int stk[128];
+      for (int body : near_bodies[g]) {
+        if (body < 0) {
+          far[g].push_back({FieldPlan::kBodyNode, ~body});
           continue;
         }
-        const int ch = m.node_child[n];
-        if (ch >= 0) {
-          assert(top + m.node_nchild[n] <= 128);
-          for (int k = ch + m.node_nchild[n] - 1; k >= ch; --k) stack[top++] = k;
-          continue;
-        }
-        // Leaf: cells that may be near some target are decided per target; the rest are dipoles.
-        for (int c = m.node_begin[n]; c < m.node_end[n]; ++c) {
-          const Vec3& mc = src.cell[c];
-          if (mc.squaredNorm() == 0.0) continue;
-          const Vec3 xc = origin + s.cell_offset[c];
-          const double lim = std::max(opt.near_field * 2.0 * m.cell_half[c].maxCoeff(), opt.smear_inside ? m.cell_reach[c] : 0.0);
-          const bool maybe_near = (xc - gc).norm() - gr < lim + m.cell_reach[c];
-          // Targets that are cells skip themselves: cells of the group's own leaf are decided
-          // target by target (a group of induced cells is one leaf, from_induced_cells()).
-          const bool self = t.cell[tb] >= 0 && m.node_begin[n] <= t.cell[tb] && t.cell[tb] < m.node_end[n];
-          if (maybe_near || self) {
-            near.push_back(c);
-          } else {
-            far.push_back({xc - gc, mc});
+        const Vec3 origin = s.body_pose[body].position;
+        int top = 0;
+        stk[top++] = m.body_root[body];
+        while (top > 0) {
+          const int n = stk[--top];
+          if (!src.node_active[n]) continue;
+          const double dn = (origin + s.node_offset[n] - gc).norm();
+          const double rn = m.node_radius[n];
+          if (rn + gr < opt.theta * dn && dn - rn - gr > opt.near_field * 2.0 * m.node_reach[n]) {
+            far[g].push_back({FieldPlan::kCellNode, n});  // the node acts as one dipole at its centre
+            continue;
+          }
+          const int ch = m.node_child[n];
+          if (ch >= 0) {
+            assert(top + m.node_nchild[n] <= 128);
+            for (int c = ch + m.node_nchild[n] - 1; c >= ch; --c) stk[top++] = c;
+            continue;
+          }
+          // Leaf: cells that may be near some target are decided per target; the rest are dipoles.
+          for (int c = m.node_begin[n]; c < m.node_end[n]; ++c) {
+            if (src.cell[c].squaredNorm() == 0.0) continue;
+            const Vec3 xc = origin + s.cell_offset[c];
+            const double lim = std::max(opt.near_field * 2.0 * m.cell_half[c].maxCoeff(), opt.smear_inside ? m.cell_reach[c] : 0.0);
+            const bool maybe_near = (xc - gc).norm() - gr < lim + m.cell_reach[c];
+            // Targets that are cells skip themselves: cells of the group's own leaf are decided
+            // target by target (a group of induced cells is one leaf, from_induced_cells()).
+            const bool self = t.cell[tb] >= 0 && m.node_begin[n] <= t.cell[tb] && t.cell[tb] < m.node_end[n];
+            if (maybe_near || self) {
+              near[g].push_back(c);
+            } else {
+              far[g].push_back({FieldPlan::kCell, c});
+            }
           }
         }
       }
     }
-    const int n = te - tb;
-    count += std::int64_t(far.size() + near.size()) * n;
-    // Far nodes and plain leaf dipoles.
-    rel.resize(n);
-    for (int q = 0; q < n; ++q) rel[q] = t.position[tb + q] - gc;
-    if (opt.single_precision) {
-      dipoles_f32(far, rel, n, B.data() + tb);
-    } else {
-      dipoles_f64(far, rel, n, B.data() + tb);
+  });
+  // Flatten, in a fixed order.
+  plan.local_begin.assign(ntask + 1, 0);
+  for (int k = 0; k < ntask; ++k) plan.local_begin[k + 1] = plan.local_begin[k] + static_cast<int>(locals[k].size());
+  plan.local_pair.reserve(plan.local_begin[ntask]);
+  for (auto& l : locals) plan.local_pair.insert(plan.local_pair.end(), l.begin(), l.end());
+  for (int g = 0; g < ngroup; ++g) {
+    plan.far_begin[g + 1] = plan.far_begin[g] + static_cast<int>(far[g].size());
+    plan.near_begin[g + 1] = plan.near_begin[g] + static_cast<int>(near[g].size());
+    const std::int64_t n = t.group_begin[g + 1] - t.group_begin[g];
+    plan.pairs += n * std::int64_t(far[g].size() + near[g].size());
+  }
+  plan.far.reserve(plan.far_begin[ngroup]);
+  plan.near.reserve(plan.near_begin[ngroup]);
+  for (int g = 0; g < ngroup; ++g) {
+    plan.far.insert(plan.far.end(), far[g].begin(), far[g].end());
+    plan.near.insert(plan.near.end(), near[g].begin(), near[g].end());
+  }
+  plan.pairs += static_cast<std::int64_t>(plan.local_pair.size()) + static_cast<std::int64_t>(t.position.size());
+  return plan;
+}
+
+std::int64_t apply_field_plan(const FieldPlan& plan, const Model& m, const State& s, const Sources& src,
+                              const Targets& t, const FieldOptions& opt, std::span<Vec3> B) {
+  assert(B.size() == t.position.size());
+  std::fill(B.begin(), B.end(), Vec3::Zero());
+  const BodyTree& tt = plan.target_tree;
+  if (tt.empty() || s.body_tree.empty()) return 0;
+  const BodyTree& bt = s.body_tree;
+  BodyTreeSources agg;
+  agg.aggregate(bt, m, src);
+  std::vector<LocalExpansion> local(tt.node_count());
+  std::vector<std::uint8_t> has_local(tt.node_count(), 0);
+  parallel_for_each(static_cast<int>(plan.roots.size()), 1, [&](int k) {
+    for (int e = plan.local_begin[k]; e < plan.local_begin[k + 1]; ++e) {
+      const auto [x, y] = plan.local_pair[e];
+      local[x].add_dipole(tt.center[x] - bt.center[y], agg.moment[y]);
+      has_local[x] = 1;
     }
-    // Near cells, target by target, in double: exact cuboids, smeared cuboids inside, dipoles.
-    for (int c : near) {
-      const int body = m.cell_body[c];
-      const Vec3 origin = s.body_pose[body].position;
-      const Vec3& mc = src.cell[c];
-      const Vec3 xc = origin + s.cell_offset[c];
-      const Vec3 cc = origin + s.body_rotation[body] * m.cell_center[c];
-      const Mat3& R = s.part_rotation[m.cell_part[c]];
-      const Vec3& h = m.cell_half[c];
-      const double lim = opt.near_field * 2.0 * h.maxCoeff();
-      for (int q = tb; q < te; ++q) {
-        if (t.cell[q] == c) continue;
-        const Vec3 rc = t.position[q] - cc;
-        bool cuboid = opt.near_field > 0.0 && m.cell_full[c] && rc.squaredNorm() < lim * lim;
-        if (!cuboid && opt.smear_inside) {
-          const Vec3 local = R.transpose() * rc;
-          cuboid = (local.cwiseAbs() - h).maxCoeff() <= 0.0;
+    // Hand the expansions down the subtree; at a group, evaluate its expansion at every target,
+    // then its far dipoles and near cells.
+    std::vector<int> down{plan.roots[k]};
+    std::vector<Source> far;
+    std::vector<Vec3> rel;
+    while (!down.empty()) {
+      const int x = down.back();
+      down.pop_back();
+      const int cx = tt.child[x];
+      if (cx >= 0) {
+        if (has_local[x]) {
+          for (int c = cx; c < cx + 2; ++c) {
+            local[x].shift_into(tt.center[c] - tt.center[x], local[c]);
+            has_local[c] = 1;
+          }
         }
-        if (cuboid) {
-          // The cell's cuboid with its moment smeared over it (exact for full cells).
-          const double vol = 8.0 * h.prod();
-          B[q] += R * cuboid_b_field(h, R.transpose() * mc / vol, R.transpose() * rc);
-        } else {
-          const Vec3 r = t.position[q] - xc;
-          if (r.squaredNorm() > 0.0) B[q] += dipole_field(r, mc);
+        down.push_back(cx + 1);
+        down.push_back(cx);
+        continue;
+      }
+      const int g = tt.body[x];
+      const int tb = t.group_begin[g], te = t.group_begin[g + 1], n = te - tb;
+      const Vec3 gc = t.group_center[g];
+      if (has_local[x]) {
+        for (int q = tb; q < te; ++q) B[q] += local[x].at(t.position[q] - tt.center[x]);
+      }
+      far.clear();
+      for (int e = plan.far_begin[g]; e < plan.far_begin[g + 1]; ++e) far.push_back(far_source(plan.far[e], m, s, src, agg, gc));
+      rel.resize(n);
+      for (int q = 0; q < n; ++q) rel[q] = t.position[tb + q] - gc;
+      if (opt.single_precision) {
+        dipoles_f32(far, rel, n, B.data() + tb);
+      } else {
+        dipoles_f64(far, rel, n, B.data() + tb);
+      }
+      // Near cells, target by target, in double: exact cuboids, smeared cuboids inside, dipoles.
+      for (int e = plan.near_begin[g]; e < plan.near_begin[g + 1]; ++e) {
+        const int c = plan.near[e];
+        const int body = m.cell_body[c];
+        const Vec3 origin = s.body_pose[body].position;
+        const Vec3& mc = src.cell[c];
+        const Vec3 xc = origin + s.cell_offset[c];
+        const Vec3 cc = origin + s.body_rotation[body] * m.cell_center[c];
+        const Mat3& R = s.part_rotation[m.cell_part[c]];
+        const Vec3& h = m.cell_half[c];
+        const double lim = opt.near_field * 2.0 * h.maxCoeff();
+        for (int q = tb; q < te; ++q) {
+          if (t.cell[q] == c) continue;
+          const Vec3 rc = t.position[q] - cc;
+          bool cuboid = opt.near_field > 0.0 && m.cell_full[c] && rc.squaredNorm() < lim * lim;
+          if (!cuboid && opt.smear_inside) {
+            const Vec3 lc = R.transpose() * rc;
+            cuboid = (lc.cwiseAbs() - h).maxCoeff() <= 0.0;
+          }
+          if (cuboid) {
+            // The cell's cuboid with its moment smeared over it (exact for full cells).
+            const double vol = 8.0 * h.prod();
+            B[q] += R * cuboid_b_field(h, R.transpose() * mc / vol, R.transpose() * rc);
+          } else {
+            const Vec3 r = t.position[q] - xc;
+            if (r.squaredNorm() > 0.0) B[q] += dipole_field(r, mc);
+          }
         }
       }
     }
-    work[g] = count;
   });
-  return std::accumulate(work.begin(), work.end(), std::int64_t(0));
+  return plan.pairs;
+}
+
+std::int64_t field_at_targets(const Model& m, const State& s, const Sources& src, const Targets& t,
+                              const FieldOptions& opt, std::span<Vec3> B) {
+  return apply_field_plan(plan_field(m, s, src, t, opt), m, s, src, t, opt, B);
 }
 
 }  // namespace magbake::magnetics

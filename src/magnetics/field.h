@@ -5,6 +5,7 @@
 #include <span>
 #include <vector>
 
+#include "body_tree.h"
 #include "state.h"
 
 namespace magbake::magnetics {
@@ -20,6 +21,40 @@ struct FieldOptions {
   /// sums and everything else in double. (Either way a target that is a cell skips itself.)
   bool single_precision = false;
 };
+
+/// The interaction lists of one field evaluation (field.cpp's dual walk): which far groups of
+/// bodies reach which nodes of a hierarchy over the target groups as local expansions, and
+/// which cell nodes, cells and far body groups each target group sums itself. They depend on
+/// the targets, the poses, the options and which sources are active (and how much a group's
+/// moments cancel), not on the moments' values: applied to other moments of the same active
+/// cells (the induction's Krylov vectors), the evaluation is one fixed linear operator.
+struct FieldPlan {
+  enum Kind : std::uint8_t { kBodyNode, kCellNode, kCell };
+  /// A far source of one target group: a node of State::body_tree, a cell-hierarchy node, or a cell.
+  struct Far {
+    Kind kind;
+    int index;
+  };
+  BodyTree target_tree;                         ///< over the target groups (leaf body[] = group)
+  std::vector<int> roots;                       ///< target subtrees evaluated independently
+  std::vector<int> local_begin;                 ///< (nroot + 1) into local_pair
+  std::vector<std::pair<int, int>> local_pair;  ///< (target-tree node, body-tree node)
+  std::vector<int> far_begin;                   ///< (ngroup + 1) into far
+  std::vector<Far> far;
+  std::vector<int> near_begin;                  ///< (ngroup + 1) into near
+  std::vector<int> near;                        ///< cells evaluated target by target
+  std::int64_t pairs = 0;                       ///< source–target evaluations of one application
+};
+
+/// Walks the hierarchies once for `targets` and the active sources of `sources` (positions from
+/// the state).
+FieldPlan plan_field(const Model& model, const State& s, const Sources& sources, const Targets& targets,
+                     const FieldOptions& options);
+
+/// B (tesla, world) of `sources` at every target through a plan made for the same targets, state
+/// and options (sources active where the plan's were). Returns the source–target evaluations.
+std::int64_t apply_field_plan(const FieldPlan& plan, const Model& model, const State& s, const Sources& sources,
+                              const Targets& targets, const FieldOptions& options, std::span<Vec3> B);
 
 /// B (tesla, world) of `sources` at every target, in target order (B has targets.position.size()
 /// entries). Cell world positions come from the state (body poses set, offsets updated).

@@ -234,12 +234,25 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
     return rep;
   }
 
-  // A x = x - alpha B_induced[x]: field of all other induced cells at each induced cell.
-  auto apply = [&](const Vector& x, Vector& y) {
+  // A x = x - alpha B_induced[x]: field of all other induced cells at each induced cell. The
+  // tree walk is done once per solve (FieldPlan), so A is one linear operator for GMRES; its
+  // opening decisions take the groups' cancellation from the one-pass moments b (a cell whose b
+  // is exactly zero still counts as a source).
+  auto load = [&](const Vector& x) {
     std::fill(s.induced.cell.begin(), s.induced.cell.end(), Vec3::Zero());
     for (int q = 0; q < n; ++q) s.induced.cell[t.cell[q]] = x.segment<3>(3 * q);
     s.induced.aggregate(m);
-    stats.field_pairs += field_at_targets(m, s, s.induced, t, fopt, B);
+  };
+  Vector shape = b;
+  const double tiny = 1e-30 * bnorm;
+  for (int q = 0; q < 3 * n; q += 3) {
+    if (shape.segment<3>(q).squaredNorm() == 0.0) shape.segment<3>(q).setConstant(tiny);
+  }
+  load(shape);
+  const FieldPlan plan = plan_field(m, s, s.induced, t, fopt);
+  auto apply = [&](const Vector& x, Vector& y) {
+    load(x);
+    stats.field_pairs += apply_field_plan(plan, m, s, s.induced, t, fopt, B);
     y.resize(3 * n);
     for (int q = 0; q < n; ++q) {
       Vec3 Bq = B[q];

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "magnetics/body_tree.h"
+#include "magnetics/field.h"
 #include "support/scenes.h"
 
 namespace magbake::testing {
@@ -113,6 +114,57 @@ TEST(BodyTree, ForcesOfManyBodiesMatchEveryCellPair) {
   const Sums sm = sums(s, r);
   EXPECT_LT(sm.force.norm(), 1e-12 * sm.fmax * s.model.body_count);
   EXPECT_LT(sm.angular.norm(), 1e-12 * sm.lmax * s.model.body_count);
+}
+
+// The dual field walk (field.cpp: a hierarchy over target groups against the one over bodies,
+// far groups handed down as second-order local expansions) at every steel cell of 1000 spheres:
+// the field of all cells against every cell pair (theta 0), and its plan is one linear operator
+// (what the induction's GMRES needs).
+TEST(DualFieldWalk, MatchesEveryCellAndIsLinearInTheMoments) {
+  std::mt19937 rng(3);
+  Rig s;
+  build_lattice(s, 1000, rng);
+  Settings st;
+  Result r;
+  evaluate(s.model, st, s.state, r);
+  const Targets& t = s.state.induced_targets;
+  ASSERT_GT(t.position.size(), 10000u);
+  std::vector<Vec3> B(t.position.size()), B0(t.position.size());
+  EvalStats ref_stats;
+  const std::int64_t work = field_at_targets(s.model, s.state, s.state.total, t, FieldOptions{0.5, 0.0}, B);
+  const std::int64_t work0 = field_at_targets(s.model, s.state, s.state.total, t, FieldOptions{0.0, 0.0}, B0);
+  double num = 0, den = 0;
+  for (std::size_t q = 0; q < B.size(); ++q) num += (B[q] - B0[q]).squaredNorm(), den += B0[q].squaredNorm();
+  std::printf("1000 bodies, %zu steel cells: rms field error %.2e at theta 0.5, %lld of %lld pair evaluations\n",
+              B.size(), std::sqrt(num / den), (long long)work, (long long)work0);
+  // Measured 8.4e-3 with 7.1e6 of 2.0e9 evaluations; the walk before the local expansions (every
+  // target group summing every far aggregate itself) gave 4.8e-3 with 2.9e7, and the same forces
+  // (BodyTree.ForcesOfManyBodiesMatchEveryCellPair: 0.38% against 0.37% rms from theta 0).
+  EXPECT_LT(std::sqrt(num / den), 1.2e-2);
+  EXPECT_LT(work, work0 / 200);
+
+  // Linearity: B[a x + y] = a B[x] + B[y] through one plan, for moments unlike the planned ones.
+  std::normal_distribution<double> g;
+  Sources x = s.state.induced, y = s.state.induced;
+  for (int c : s.model.induced_cells) {
+    x.cell[c] = 1e-4 * Vec3(g(rng), g(rng), g(rng));
+    y.cell[c] = 1e-4 * Vec3(g(rng), g(rng), g(rng));
+  }
+  Sources z = x;
+  for (int c : s.model.induced_cells) z.cell[c] = 3.0 * x.cell[c] + y.cell[c];
+  x.aggregate(s.model), y.aggregate(s.model), z.aggregate(s.model);
+  const FieldPlan plan = plan_field(s.model, s.state, s.state.induced, t, FieldOptions{0.5, 0.0});
+  EXPECT_GT(plan.local_pair.size(), 0u);
+  std::vector<Vec3> Bx(B.size()), By(B.size()), Bz(B.size());
+  apply_field_plan(plan, s.model, s.state, x, t, FieldOptions{0.5, 0.0}, Bx);
+  apply_field_plan(plan, s.model, s.state, y, t, FieldOptions{0.5, 0.0}, By);
+  apply_field_plan(plan, s.model, s.state, z, t, FieldOptions{0.5, 0.0}, Bz);
+  double lin = 0, scale = 0;
+  for (std::size_t q = 0; q < B.size(); ++q) {
+    lin = std::max(lin, (Bz[q] - 3.0 * Bx[q] - By[q]).norm());
+    scale = std::max(scale, Bz[q].norm());
+  }
+  EXPECT_LT(lin, 1e-12 * scale);
 }
 
 // Groups far apart: a cluster of magnets and one far away, where the tree aggregates whole
