@@ -50,21 +50,46 @@ struct LocalExpansion {
   ///              - 15 ((m.r)(r_i d_kl + r_k d_il + r_l d_ik) + m_i r_k r_l + m_k r_i r_l + m_l r_i r_k) / r^7
   ///              + 3 (m_i d_kl + m_k d_il + m_l d_ik) / r^5]
   void add_dipole(const Vec3& r, const Vec3& m) {
-    const double d2 = r.squaredNorm();
-    const double inv = 1.0 / std::sqrt(d2);
-    const double inv2 = inv * inv;
-    const double inv5 = kMu0Over4Pi * inv2 * inv2 * inv;  // k / r^5
-    const double inv7 = inv5 * inv2, inv9 = inv7 * inv2;
-    const double mr = m.dot(r);
-    b += inv5 * (3.0 * mr * r - d2 * m);
-    const double e3 = 3.0 * inv5, c15 = 15.0 * inv7, a105 = 105.0 * mr * inv9, q15 = c15 * mr;
-    add_g<0, 0>(r, m, mr, e3, q15), add_g<0, 1>(r, m, mr, e3, q15), add_g<0, 2>(r, m, mr, e3, q15);
-    add_g<1, 1>(r, m, mr, e3, q15), add_g<1, 2>(r, m, mr, e3, q15), add_g<2, 2>(r, m, mr, e3, q15);
-    add_h<0, 0, 0>(r, m, mr, a105, c15, e3), add_h<0, 0, 1>(r, m, mr, a105, c15, e3);
-    add_h<0, 0, 2>(r, m, mr, a105, c15, e3), add_h<0, 1, 1>(r, m, mr, a105, c15, e3);
-    add_h<0, 1, 2>(r, m, mr, a105, c15, e3), add_h<0, 2, 2>(r, m, mr, a105, c15, e3);
-    add_h<1, 1, 1>(r, m, mr, a105, c15, e3), add_h<1, 1, 2>(r, m, mr, a105, c15, e3);
-    add_h<1, 2, 2>(r, m, mr, a105, c15, e3), add_h<2, 2, 2>(r, m, mr, a105, c15, e3);
+    const double rv[3] = {r[0], r[1], r[2]}, mv[3] = {m[0], m[1], m[2]};
+    double t[kTerms];
+    dipole_terms(rv, mv, [](double d2) { return 1.0 / std::sqrt(d2); }, t);
+    add_terms(t);
+  }
+
+  /// Number of distinct terms: b, g and h in storage order.
+  static constexpr int kTerms = 19;
+
+  /// The kTerms terms of add_dipole(r, m) for T = double or a vector of doubles with
+  /// element-wise operators (inv_sqrt(d2) = 1 / sqrt(d2), correctly rounded): the same
+  /// operations in the same order either way, so a batch of dipoles evaluated in SIMD lanes adds
+  /// exactly what one at a time adds.
+  template <class T, class InvSqrt>
+  static void dipole_terms(const T r[3], const T m[3], InvSqrt inv_sqrt, T out[kTerms]) {
+    const T d2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+    const T inv = inv_sqrt(d2);
+    const T inv2 = inv * inv;
+    const T inv5 = kMu0Over4Pi * inv2 * inv2 * inv;  // k / r^5
+    const T inv7 = inv5 * inv2, inv9 = inv7 * inv2;
+    const T mr = m[0] * r[0] + m[1] * r[1] + m[2] * r[2];
+    for (int i = 0; i < 3; ++i) out[i] = inv5 * (3.0 * mr * r[i] - d2 * m[i]);
+    const T e3 = 3.0 * inv5, c15 = 15.0 * inv7, a105 = 105.0 * mr * inv9, q15 = c15 * mr;
+    T* g = out + 3;
+    g[0] = g_term<0, 0>(r, m, mr, e3, q15), g[1] = g_term<0, 1>(r, m, mr, e3, q15);
+    g[2] = g_term<0, 2>(r, m, mr, e3, q15), g[3] = g_term<1, 1>(r, m, mr, e3, q15);
+    g[4] = g_term<1, 2>(r, m, mr, e3, q15), g[5] = g_term<2, 2>(r, m, mr, e3, q15);
+    T* h = out + 9;
+    h[0] = h_term<0, 0, 0>(r, m, mr, a105, c15, e3), h[1] = h_term<0, 0, 1>(r, m, mr, a105, c15, e3);
+    h[2] = h_term<0, 0, 2>(r, m, mr, a105, c15, e3), h[3] = h_term<0, 1, 1>(r, m, mr, a105, c15, e3);
+    h[4] = h_term<0, 1, 2>(r, m, mr, a105, c15, e3), h[5] = h_term<0, 2, 2>(r, m, mr, a105, c15, e3);
+    h[6] = h_term<1, 1, 1>(r, m, mr, a105, c15, e3), h[7] = h_term<1, 1, 2>(r, m, mr, a105, c15, e3);
+    h[8] = h_term<1, 2, 2>(r, m, mr, a105, c15, e3), h[9] = h_term<2, 2, 2>(r, m, mr, a105, c15, e3);
+  }
+
+  /// Adds terms made by dipole_terms().
+  void add_terms(const double t[kTerms]) {
+    for (int i = 0; i < 3; ++i) b[i] += t[i];
+    for (int q = 0; q < 6; ++q) g[q] += t[3 + q];
+    for (int q = 0; q < 10; ++q) h[q] += t[9 + q];
   }
 
   /// Adds this expansion re-centred at c + delta (m) to `out` (exact: the expansion is a
@@ -97,18 +122,20 @@ struct LocalExpansion {
   }
 
  private:
-  template <int I, int K>
-  void add_g(const Vec3& r, const Vec3& m, double mr, double e3, double q15) {
-    constexpr double dik = I == K;
-    g[sym2(I, K)] += e3 * (m[I] * r[K] + m[K] * r[I] + mr * dik) - q15 * r[I] * r[K];
+  template <int I, int K, class T>
+  static T g_term(const T* r, const T* m, T mr, T e3, T q15) {
+    T s = m[I] * r[K] + m[K] * r[I];
+    if constexpr (I == K) s = s + mr;
+    return e3 * s - q15 * r[I] * r[K];
   }
-  template <int I, int K, int L>
-  void add_h(const Vec3& r, const Vec3& m, double mr, double a105, double c15, double e3) {
-    constexpr double dkl = K == L, dil = I == L, dik = I == K;
-    h[sym3(I, K, L)] += a105 * r[I] * r[K] * r[L] -
-                        c15 * (mr * (r[I] * dkl + r[K] * dil + r[L] * dik) + m[I] * r[K] * r[L] + m[K] * r[I] * r[L] +
-                               m[L] * r[I] * r[K]) +
-                        e3 * (m[I] * dkl + m[K] * dil + m[L] * dik);
+  template <int I, int K, int L, class T>
+  static T h_term(const T* r, const T* m, T mr, T a105, T c15, T e3) {
+    T del{}, dm{};  // sum of r and of m over the Kronecker deltas that are 1
+    if constexpr (K == L) del = del + r[I], dm = dm + m[I];
+    if constexpr (I == L) del = del + r[K], dm = dm + m[K];
+    if constexpr (I == K) del = del + r[L], dm = dm + m[L];
+    const T lin = m[I] * r[K] * r[L] + m[K] * r[I] * r[L] + m[L] * r[I] * r[K];
+    return a105 * r[I] * r[K] * r[L] - c15 * (mr * del + lin) + e3 * dm;
   }
 };
 

@@ -72,5 +72,34 @@ TEST(LocalExpansion, ErrorIsThirdOrderAndShiftingIsExact) {
   }
 }
 
+// The field walk adds four dipoles' terms at a time in SIMD lanes (field.cpp): bit for bit what
+// one at a time adds, so results do not depend on how pairs fall into batches.
+TEST(LocalExpansion, VectorLanesComputeExactlyTheScalarTerms) {
+  using v4d = double __attribute__((vector_size(32)));
+  std::mt19937 rng(9);
+  for (int t = 0; t < 50; ++t) {
+    v4d r[3], m[3];
+    double rs[4][3], ms[4][3];
+    for (int j = 0; j < 4; ++j) {
+      const Vec3 a = 0.01 * (1 + j) * random_unit(rng), b = random_unit(rng);
+      for (int c = 0; c < 3; ++c) r[c][j] = rs[j][c] = a[c], m[c][j] = ms[j][c] = b[c];
+    }
+    v4d vt[LocalExpansion::kTerms];
+    LocalExpansion::dipole_terms(
+        r, m,
+        [](v4d d2) {
+          v4d out;
+          for (int j = 0; j < 4; ++j) out[j] = 1.0 / std::sqrt(d2[j]);
+          return out;
+        },
+        vt);
+    for (int j = 0; j < 4; ++j) {
+      double st[LocalExpansion::kTerms];
+      LocalExpansion::dipole_terms(rs[j], ms[j], [](double d2) { return 1.0 / std::sqrt(d2); }, st);
+      for (int q = 0; q < LocalExpansion::kTerms; ++q) EXPECT_EQ(vt[q][j], st[q]) << t << " " << j << " " << q;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace magbake::testing
