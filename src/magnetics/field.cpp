@@ -284,8 +284,10 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
   FieldPlan plan;
   const int ngroup = static_cast<int>(t.group_begin.size()) - 1;
   const BodyTree& bt = s.body_tree;
-  plan.far_begin.assign(std::max(ngroup, 0) + 1, 0);
-  plan.near_begin.assign(std::max(ngroup, 0) + 1, 0);
+  plan.far_begin.assign(std::max(ngroup, 0), 0);
+  plan.far_end.assign(std::max(ngroup, 0), 0);
+  plan.near_begin.assign(std::max(ngroup, 0), 0);
+  plan.near_end.assign(std::max(ngroup, 0), 0);
   if (bt.empty() || ngroup <= 0) return plan;
   BodyTreeSources agg;
   agg.aggregate(bt, m, src);
@@ -299,9 +301,11 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
   // target below); a few target groups take the far aggregate at each target; a target group
   // next to a body walks that body's cells.
   std::vector<std::vector<std::pair<int, int>>> locals(ntask);
-  std::vector<std::vector<int>> near_bodies(ngroup);  // per group, in walk order: bodies (>= 0), far nodes (~node)
-  std::vector<std::vector<FieldPlan::Far>> far(ngroup);
-  std::vector<std::vector<int>> near(ngroup);
+  // Per subtree: (group, body >= 0 or ~far body-tree node) in walk order, and the lists of its
+  // groups, one after the other in tree order (offsets relative to the subtree's own lists).
+  std::vector<std::vector<std::pair<int, int>>> walk_near(ntask);
+  std::vector<std::vector<FieldPlan::Far>> far(ntask);
+  std::vector<std::vector<int>> near(ntask);
   parallel_for_each(ntask, 1, [&](int k) {
     std::vector<std::pair<int, int>> stack{{plan.roots[k], 0}};
     while (!stack.empty()) {
@@ -316,7 +320,7 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
       if (tt.end[x] - tt.begin[x] < kLocalGroups) {
         // Few targets: the aggregate at each of them costs less than an expansion.
         if (gap && agg.open_radius[y] + rx < theta * d) {
-          for (int q = tt.begin[x]; q < tt.end[x]; ++q) near_bodies[tt.order[q]].push_back(~y);
+          for (int q = tt.begin[x]; q < tt.end[x]; ++q) walk_near[k].emplace_back(tt.order[q], ~y);
           continue;
         }
       } else if (gap && agg.open_radius[y] < theta * (d - rx) && rx < kLocalTheta * opt.theta * d) {
@@ -326,7 +330,7 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
       }
       const int cx = tt.child[x], cy = bt.child[y];
       if (cx < 0 && cy < 0) {
-        near_bodies[tt.body[x]].push_back(bt.body[y]);
+        walk_near[k].emplace_back(tt.body[x], bt.body[y]);
       } else if (cy < 0 || (cx >= 0 && tt.radius[x] >= bt.radius[y])) {
         stack.emplace_back(cx + 1, y);
         stack.emplace_back(cx, y);
@@ -338,15 +342,29 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
     // Each group of the subtree against the cell hierarchies of its near bodies: far cell nodes
     // and plain cells are dipoles summed at every target, cells near a target are decided target
     // by target.
+    // Entries by group in tree order, walk order kept within a group (a counting sort).
+    const int q0 = tt.begin[plan.roots[k]], q1 = tt.end[plan.roots[k]];
+    std::vector<int> start(q1 - q0 + 1, 0);
+    for (const auto& [g, v] : walk_near[k]) ++start[tt.begin[tt.leaf_of[g]] - q0 + 1];
+    for (int q = 0; q < q1 - q0; ++q) start[q + 1] += start[q];
+    std::vector<int> wn(walk_near[k].size());
+    {
+      std::vector<int> fill(start.begin(), start.end() - 1);
+      for (const auto& [g, v] : walk_near[k]) wn[fill[tt.begin[tt.leaf_of[g]] - q0]++] = v;
+    }
+    std::vector<std::pair<int, int>>().swap(walk_near[k]);
     for (int q = tt.begin[plan.roots[k]]; q < tt.end[plan.roots[k]]; ++q) {
       const int g = tt.order[q];
       const int tb = t.group_begin[g];
       const Vec3 gc = t.group_center[g];
       const double gr = t.group_radius[g];
       int stk[128];
-      for (int body : near_bodies[g]) {
+      plan.far_begin[g] = static_cast<int>(far[k].size());
+      plan.near_begin[g] = static_cast<int>(near[k].size());
+      for (int e = start[q - q0]; e < start[q - q0 + 1]; ++e) {
+        const int body = wn[e];
         if (body < 0) {
-          far[g].push_back({FieldPlan::kBodyNode, ~body});
+          far[k].push_back({FieldPlan::kBodyNode, ~body});
           continue;
         }
         const Vec3 origin = s.body_pose[body].position;
@@ -358,7 +376,7 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
           const double dn = (origin + s.node_offset[n] - gc).norm();
           const double rn = m.node_radius[n];
           if (rn + gr < opt.theta * dn && dn - rn - gr > opt.near_field * 2.0 * m.node_reach[n]) {
-            far[g].push_back({FieldPlan::kCellNode, n});  // the node acts as one dipole at its centre
+            far[k].push_back({FieldPlan::kCellNode, n});  // the node acts as one dipole at its centre
             continue;
           }
           const int ch = m.node_child[n];
@@ -377,13 +395,15 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
             // target by target (a group of induced cells is one leaf, from_induced_cells()).
             const bool self = t.cell[tb] >= 0 && m.node_begin[n] <= t.cell[tb] && t.cell[tb] < m.node_end[n];
             if (maybe_near || self) {
-              near[g].push_back(c);
+              near[k].push_back(c);
             } else {
-              far[g].push_back({FieldPlan::kCell, c});
+              far[k].push_back({FieldPlan::kCell, c});
             }
           }
         }
       }
+      plan.far_end[g] = static_cast<int>(far[k].size());
+      plan.near_end[g] = static_cast<int>(near[k].size());
     }
   });
   // Flatten, in a fixed order.
@@ -391,17 +411,22 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
   for (int k = 0; k < ntask; ++k) plan.local_begin[k + 1] = plan.local_begin[k] + static_cast<int>(locals[k].size());
   plan.local_pair.reserve(plan.local_begin[ntask]);
   for (auto& l : locals) plan.local_pair.insert(plan.local_pair.end(), l.begin(), l.end());
-  for (int g = 0; g < ngroup; ++g) {
-    plan.far_begin[g + 1] = plan.far_begin[g] + static_cast<int>(far[g].size());
-    plan.near_begin[g + 1] = plan.near_begin[g] + static_cast<int>(near[g].size());
-    const std::int64_t n = t.group_begin[g + 1] - t.group_begin[g];
-    plan.pairs += n * std::int64_t(far[g].size() + near[g].size());
-  }
-  plan.far.reserve(plan.far_begin[ngroup]);
-  plan.near.reserve(plan.near_begin[ngroup]);
-  for (int g = 0; g < ngroup; ++g) {
-    plan.far.insert(plan.far.end(), far[g].begin(), far[g].end());
-    plan.near.insert(plan.near.end(), near[g].begin(), near[g].end());
+  std::size_t nfar = 0, nnear = 0;
+  for (int k = 0; k < ntask; ++k) nfar += far[k].size(), nnear += near[k].size();
+  plan.far.reserve(nfar);
+  plan.near.reserve(nnear);
+  for (int k = 0; k < ntask; ++k) {
+    const int f0 = static_cast<int>(plan.far.size()), n0 = static_cast<int>(plan.near.size());
+    for (int q = tt.begin[plan.roots[k]]; q < tt.end[plan.roots[k]]; ++q) {
+      const int g = tt.order[q];
+      plan.far_begin[g] += f0, plan.far_end[g] += f0, plan.near_begin[g] += n0, plan.near_end[g] += n0;
+      const std::int64_t n = t.group_begin[g + 1] - t.group_begin[g];
+      plan.pairs += n * std::int64_t(plan.far_end[g] - plan.far_begin[g] + plan.near_end[g] - plan.near_begin[g]);
+    }
+    plan.far.insert(plan.far.end(), far[k].begin(), far[k].end());
+    plan.near.insert(plan.near.end(), near[k].begin(), near[k].end());
+    std::vector<FieldPlan::Far>().swap(far[k]);
+    std::vector<int>().swap(near[k]);
   }
   plan.pairs += static_cast<std::int64_t>(plan.local_pair.size()) + static_cast<std::int64_t>(t.position.size());
   return plan;
@@ -478,7 +503,7 @@ std::int64_t apply_field_plan(const FieldPlan& plan, const Model& m, const State
         for (int q = tb; q < te; ++q) B[q] += local[x].at(t.position[q] - tt.center[x]);
       }
       far.clear();
-      for (int e = plan.far_begin[g]; e < plan.far_begin[g + 1]; ++e) far.push_back(far_source(plan.far[e], m, s, src, agg, gc));
+      for (int e = plan.far_begin[g]; e < plan.far_end[g]; ++e) far.push_back(far_source(plan.far[e], m, s, src, agg, gc));
       rel.resize(n);
       for (int q = 0; q < n; ++q) rel[q] = t.position[tb + q] - gc;
       if (opt.single_precision) {
@@ -487,7 +512,7 @@ std::int64_t apply_field_plan(const FieldPlan& plan, const Model& m, const State
         dipoles_f64(far, rel, n, B.data() + tb);
       }
       // Near cells, target by target, in double: exact cuboids, smeared cuboids inside, dipoles.
-      for (int e = plan.near_begin[g]; e < plan.near_begin[g + 1]; ++e) {
+      for (int e = plan.near_begin[g]; e < plan.near_end[g]; ++e) {
         const int c = plan.near[e];
         const int body = m.cell_body[c];
         const Vec3 origin = s.body_pose[body].position;

@@ -39,9 +39,9 @@ struct FieldPlan {
   std::vector<int> roots;                       ///< target subtrees evaluated independently
   std::vector<int> local_begin;                 ///< (nroot + 1) into local_pair
   std::vector<std::pair<int, int>> local_pair;  ///< (target-tree node, body-tree node)
-  std::vector<int> far_begin;                   ///< (ngroup + 1) into far
-  std::vector<Far> far;
-  std::vector<int> near_begin;                  ///< (ngroup + 1) into near
+  std::vector<int> far_begin, far_end;          ///< (ngroup) range of group g in far
+  std::vector<Far> far;                         ///< the groups' lists in target-tree order
+  std::vector<int> near_begin, near_end;        ///< (ngroup) range of group g in near
   std::vector<int> near;                        ///< cells evaluated target by target
   std::int64_t pairs = 0;                       ///< source–target evaluations of one application
 };
