@@ -5,6 +5,7 @@
 #include <random>
 
 #include "magnetics/dipole.h"
+#include "support/random.h"
 #include "support/closed_forms.h"
 #include "support/scenes.h"
 
@@ -12,11 +13,6 @@ namespace magbake::testing {
 namespace {
 
 using namespace magnetics;
-
-Vec3 random_unit(std::mt19937& rng) {
-  std::normal_distribution<double> n;
-  return Vec3(n(rng), n(rng), n(rng)).normalized();
-}
 
 // F_k = grad (m_k . B_i) by a 4th-order central difference of the field formula.
 Vec3 numerical_force(const Vec3& r, const Vec3& mk, const Vec3& mi) {

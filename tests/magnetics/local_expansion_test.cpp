@@ -6,16 +6,12 @@
 
 #include "magnetics/dipole.h"
 #include "magnetics/local_expansion.h"
+#include "support/random.h"
 
 namespace magbake::testing {
 namespace {
 
 using namespace magnetics;
-
-Vec3 random_unit(std::mt19937& rng) {
-  std::normal_distribution<double> n;
-  return Vec3(n(rng), n(rng), n(rng)).normalized();
-}
 
 TEST(LocalExpansion, DerivativesMatchTheDipoleAndFiniteDifferences) {
   std::mt19937 rng(17);
