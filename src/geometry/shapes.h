@@ -61,6 +61,10 @@ class SphereShape final : public Shape {
   Box3 bounds() const override { return Box3(Vec3::Constant(-r_), Vec3::Constant(r_)); }
   double volume() const override;
   bool contains(const Vec3& p) const override;
+  bool ball(double& radius) const override {
+    radius = r_;
+    return true;
+  }
   bool demag_tensor(const Vec3& p, Mat3& D) const override;
   ShapeKind kind() const override { return ShapeKind::kSphere; }
   MassProperties mass_properties() const override;

@@ -224,7 +224,7 @@ CacheWriter::CacheWriter(const std::string& path, const scene::Scene& sc, const 
     const hsize_t nc = cells.size(), np = parts.body.size();
     Handle c = h5::create_group(g.id(), "cells");
     std::vector<std::int64_t> cb(cells.body.begin(), cells.body.end()), cp(cells.part.begin(), cells.part.end()),
-        full(cells.full.begin(), cells.full.end());
+        full(cells.full.begin(), cells.full.end()), ball(cells.ball.begin(), cells.ball.end());
     h5::write_ints(c.id(), "body", {nc}, cb.data());
     h5::write_ints(c.id(), "part", {nc}, cp.data());
     h5::write_doubles(c.id(), "position", {nc, 3}, flat(cells.position).data(), "m");
@@ -234,6 +234,7 @@ CacheWriter::CacheWriter(const std::string& path, const scene::Scene& sc, const 
     h5::write_doubles(c.id(), "volume", {nc}, cells.volume.data(), "m3");
     h5::write_doubles(c.id(), "chi", {nc}, cells.chi.data());
     h5::write_ints(c.id(), "full", {nc}, full.data());
+    h5::write_ints(c.id(), "ball", {nc}, ball.data());
     Handle p = h5::create_group(g.id(), "parts");
     std::vector<std::int64_t> pb(parts.body.begin(), parts.body.end());
     std::vector<double> ppos, prot;
@@ -614,6 +615,9 @@ magnetics::Model CacheReader::model(std::vector<int>* induced_order) const {
   for (auto x : h5::read_ints(f, "magnetics/cells/body")) cells.body.push_back(int(x));
   for (auto x : h5::read_ints(f, "magnetics/cells/part")) cells.part.push_back(int(x));
   for (auto x : h5::read_ints(f, "magnetics/cells/full")) cells.full.push_back(std::uint8_t(x));
+  if (h5::exists(f, "magnetics/cells/ball")) {  // absent in caches written before exact balls
+    for (auto x : h5::read_ints(f, "magnetics/cells/ball")) cells.ball.push_back(std::uint8_t(x));
+  }
   cells.position = v3(h5::read_doubles(f, "magnetics/cells/position"));
   cells.center = v3(h5::read_doubles(f, "magnetics/cells/center"));
   cells.half = v3(h5::read_doubles(f, "magnetics/cells/half"));

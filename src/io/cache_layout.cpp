@@ -133,6 +133,15 @@ CacheLayout check_cache_layout(hid_t f, std::int64_t frames_done) {
   for (hsize_t i = 0; i < 3 * nc; ++i) {
     if (!(half[i] > 0)) fail("/magnetics/cells/half holds a non-positive half edge at cell " + std::to_string(i / 3));
   }
+  if (h5::exists(f, "magnetics/cells/ball")) {  // optional: caches before exact balls lack it
+    const std::vector<std::int64_t> ball = ints(f, "magnetics/cells/ball", {nc});
+    in_range(ball, 0, 2, "magnetics/cells/ball");
+    for (hsize_t c = 0; c < nc; ++c) {
+      if (ball[c] && !(half[3 * c] == half[3 * c + 1] && half[3 * c] == half[3 * c + 2])) {
+        fail("/magnetics/cells/ball: ball cell " + std::to_string(c) + " has unequal radii in /magnetics/cells/half");
+      }
+    }
+  }
   const std::vector<double> volume = doubles(f, "magnetics/cells/volume", {nc});
   for (hsize_t i = 0; i < nc; ++i) {
     if (!(volume[i] > 0)) fail("/magnetics/cells/volume[" + std::to_string(i) + "] is not positive");

@@ -121,7 +121,7 @@ struct BodyCells {
   std::vector<Vec3> pos, center, mom, half;
   std::vector<double> vol, chi, reach, clamp;
   std::vector<int> part;
-  std::vector<std::uint8_t> full;
+  std::vector<std::uint8_t> full, ball;
 };
 
 // Recursive bisection of cells [begin, end) of `perm` along the longest axis (paper §4.2).
@@ -249,10 +249,15 @@ Model model_from_cells(int body_count, const CellTable& cells, const PartTable& 
       bc.half.push_back(cells.half[c]);
       bc.vol.push_back(cells.volume[c]);
       bc.chi.push_back(cells.chi[c]);
-      bc.reach.push_back(cells.half[c].norm());
-      bc.clamp.push_back(cells.half[c].minCoeff());
+      const bool ball = !cells.ball.empty() && cells.ball[c];
+      // A ball cell reaches its radius. Its clamp is half the radius: another body's cells stay
+      // outside the ball (distance >= radius), so the clamp only acts on deep overlaps, never on
+      // the exact dipole field in contact (unless the other body's cells are coarser than the ball).
+      bc.reach.push_back(ball ? cells.half[c][0] : cells.half[c].norm());
+      bc.clamp.push_back(ball ? 0.5 * cells.half[c][0] : cells.half[c].minCoeff());
       bc.part.push_back(cells.part[c]);
-      bc.full.push_back(cells.full[c]);
+      bc.full.push_back(ball ? 0 : cells.full[c]);
+      bc.ball.push_back(ball);
     }
     const int begin = m.cell_count();
     m.body_cell_begin[b] = begin;
@@ -281,6 +286,7 @@ Model model_from_cells(int body_count, const CellTable& cells, const PartTable& 
         m.cell_part.push_back(bc.part[id]);
         m.cell_body.push_back(b);
         m.cell_full.push_back(bc.full[id]);
+        m.cell_ball.push_back(bc.ball[id]);
       }
     }
     m.body_cell_begin[b + 1] = m.cell_count();
@@ -306,6 +312,7 @@ void model_tables(const Model& m, CellTable& cells, PartTable& parts) {
     cells.volume.push_back(m.cell_volume[c]);
     cells.chi.push_back(m.cell_chi[c]);
     cells.full.push_back(m.cell_full[c]);
+    cells.ball.push_back(m.cell_ball[c]);
   }
   parts.body = m.part_body;
   parts.pose = m.part_pose;
@@ -330,6 +337,39 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
       const double chi = ps.material.induced() ? ps.material.susceptibility() : 0.0;
       const double cell = ps.cell_size > 0 ? ps.cell_size : settings.cell_size;
       if (!(cell > 0)) throw std::runtime_error("magnetics: cell_size must be positive");
+      double radius = 0;
+      if (settings.exact_balls && chi == 0.0 && M.squaredNorm() > 0 && ps.solid->ball(radius)) {
+        // A permanent ball: one exact cell at its centre (BuildSettings::exact_balls).
+        const double v = ps.solid->volume();
+        if (budget < 1) {
+          throw std::runtime_error("magnetics: the model would exceed " + std::to_string(settings.max_cells) +
+                                   " cells; raise magnetics.cell_size");
+        }
+        --budget;
+        PartReport rep;
+        rep.body = b;
+        rep.cells = 1;
+        rep.grid_volume = rep.true_volume = v;
+        rep.rescale = 1;
+        cells.body.push_back(b);
+        cells.part.push_back(pid);
+        cells.position.push_back(ps.part_to_body.position);
+        cells.center.push_back(ps.part_to_body.position);
+        cells.half.push_back(Vec3::Constant(radius));
+        cells.moment.push_back(M * v);
+        cells.volume.push_back(v);
+        cells.chi.push_back(0.0);
+        cells.full.push_back(0);
+        cells.ball.push_back(1);
+        parts.body.push_back(b);
+        parts.pose.push_back(ps.part_to_body);
+        parts.magnetization.push_back(M);
+        parts.half.push_back(Vec3::Constant(radius));
+        parts.chi.push_back(0.0);
+        reports.push_back(rep);
+        part_solid.push_back(ps.solid);
+        continue;
+      }
       PartCells pc = decompose(*ps.solid, cell, settings, budget);
       if (pc.centroid.empty()) {
         throw std::runtime_error("magnetics: body " + std::to_string(b) +
@@ -353,6 +393,7 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
         cells.volume.push_back(v);
         cells.chi.push_back(chi);
         cells.full.push_back(pc.full[q]);
+        cells.ball.push_back(0);
         rep.full_cells += pc.full[q];
       }
       parts.body.push_back(b);

@@ -389,7 +389,10 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
           for (int c = m.node_begin[n]; c < m.node_end[n]; ++c) {
             if (src.cell[c].squaredNorm() == 0.0) continue;
             const Vec3 xc = origin + s.cell_offset[c];
-            const double lim = std::max(opt.near_field * 2.0 * m.cell_half[c].maxCoeff(), opt.smear_inside ? m.cell_reach[c] : 0.0);
+            // A ball cell's field is its dipole outside and uniform inside (its reach).
+            const double lim = m.cell_ball[c] ? m.cell_reach[c]
+                                              : std::max(opt.near_field * 2.0 * m.cell_half[c].maxCoeff(),
+                                                         opt.smear_inside ? m.cell_reach[c] : 0.0);
             const bool maybe_near = (xc - gc).norm() - gr < lim + m.cell_reach[c];
             // Targets that are cells skip themselves: cells of the group's own leaf are decided
             // target by target (a group of induced cells is one leaf, from_induced_cells()).
@@ -525,6 +528,15 @@ std::int64_t apply_field_plan(const FieldPlan& plan, const Model& m, const State
         for (int q = tb; q < te; ++q) {
           if (t.cell[q] == c) continue;
           const Vec3 rc = t.position[q] - cc;
+          if (m.cell_ball[c]) {
+            // A uniformly magnetized ball: its dipole outside, exactly 2/3 mu0 M inside.
+            if (rc.squaredNorm() <= h[0] * h[0]) {
+              B[q] += (2.0 / 3.0) * kMu0 / m.cell_volume[c] * mc;
+            } else if (rc.squaredNorm() > 0.0) {
+              B[q] += dipole_field(rc, mc);
+            }
+            continue;
+          }
           bool cuboid = opt.near_field > 0.0 && m.cell_full[c] && rc.squaredNorm() < lim * lim;
           if (!cuboid && opt.smear_inside) {
             const Vec3 lc = R.transpose() * rc;

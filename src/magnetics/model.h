@@ -45,6 +45,12 @@ struct BuildSettings {
   /// Induced cells per block of the induction preconditioner (consecutive cells of one body,
   /// hierarchy order; each block's operator is factored once). 0 = no preconditioner.
   int induction_block = 512;
+  /// A permanent part whose solid is a ball (Solid::ball) becomes one cell at its centre holding
+  /// the ball's whole moment: exact, since a uniformly magnetized ball's field outside it is that
+  /// of a point dipole, and the force and torque a field with its sources outside the ball exerts
+  /// on it are those on the point dipole (the mean-value property of harmonic fields, physics.md
+  /// §4). false = the ball is cut into lattice cells like any other solid (validation only).
+  bool exact_balls = true;
 };
 
 /// Per-part statistics of the decomposition.
@@ -97,6 +103,10 @@ struct Model {
   std::vector<int> cell_part;            ///< (ncell) part index
   std::vector<int> cell_body;            ///< (ncell) body index
   std::vector<std::uint8_t> cell_full;   ///< (ncell) 1 if the cuboid lies entirely inside its part
+  /// (ncell) 1 if the cell is a whole uniformly magnetized ball (BuildSettings::exact_balls): its
+  /// radius is cell_half (all three equal), position = centre; a point dipole outside the ball,
+  /// B = 2/3 mu0 M inside it. Never full (no cuboid near field).
+  std::vector<std::uint8_t> cell_ball;
   std::vector<int> induced_cells;        ///< indices of cells with cell_chi != 0, ascending
 
   // ---- near-field corrections of the induction operator inside each body (rigid, so built once)
@@ -139,6 +149,7 @@ struct CellTable {
   std::vector<Vec3> position, center, half, moment;  ///< m, m, m, A·m² (permanent, body frame)
   std::vector<double> volume, chi;
   std::vector<std::uint8_t> full;
+  std::vector<std::uint8_t> ball;  ///< Model::cell_ball; empty = no ball cells (older caches)
   std::size_t size() const { return body.size(); }
 };
 

@@ -18,6 +18,13 @@ class Solid {
   virtual bool contains(const Vec3& p) const = 0;
   /// True when the region is exactly its bounding box (lets the builder skip inside tests).
   virtual bool is_box() const { return false; }
+  /// True when the region is a ball centred on its frame's origin; `radius` receives its radius
+  /// (m). A uniformly magnetized ball is exactly a point dipole for everything outside it, so
+  /// the builder gives a permanent ball one exact cell (BuildSettings::exact_balls).
+  virtual bool ball(double& radius) const {
+    (void)radius;
+    return false;
+  }
   /// Demagnetizing tensor D at p inside the region (own frame): when the whole region is
   /// uniformly magnetized with M, its own field there is H = -D M. Returns false when the solid
   /// cannot compute it (the induction solve then skips its boundary consistency correction).

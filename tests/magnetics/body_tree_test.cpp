@@ -137,11 +137,13 @@ TEST(DualFieldWalk, MatchesEveryCellAndIsLinearInTheMoments) {
   for (std::size_t q = 0; q < B.size(); ++q) num += (B[q] - B0[q]).squaredNorm(), den += B0[q].squaredNorm();
   std::printf("1000 bodies, %zu steel cells: rms field error %.2e at theta 0.5, %lld of %lld pair evaluations\n",
               B.size(), std::sqrt(num / den), (long long)work, (long long)work0);
-  // Measured 8.4e-3 with 7.1e6 of 2.0e9 evaluations; the walk before the local expansions (every
-  // target group summing every far aggregate itself) gave 4.8e-3 with 2.9e7, and the same forces
-  // (BodyTree.ForcesOfManyBodiesMatchEveryCellPair: 0.38% against 0.37% rms from theta 0).
+  // Measured 8.4e-3 with 7.1e6 of 2.0e9 evaluations with the magnet spheres cut into cells; the
+  // walk before the local expansions (every target group summing every far aggregate itself) gave
+  // 4.8e-3 with 2.9e7, and the same forces (BodyTree.ForcesOfManyBodiesMatchEveryCellPair: 0.38%
+  // against 0.37% rms from theta 0). With the magnets one exact cell each (exact_balls): 8.8e-3
+  // with 6.9e6 of 1.04e9 (the steel cells' own sums dominate both).
   EXPECT_LT(std::sqrt(num / den), 1.2e-2);
-  EXPECT_LT(work, work0 / 200);
+  EXPECT_LT(work, work0 / 120);
 
   // Linearity: B[a x + y] = a B[x] + B[y] through one plan, for moments unlike the planned ones.
   std::normal_distribution<double> g;

@@ -14,6 +14,7 @@ void Rig::build(double cell_size, int leaf_size) {
   magnetics::BuildSettings bs;
   bs.cell_size = cell_size;
   bs.leaf_size = leaf_size;
+  bs.exact_balls = exact_balls;
   model = magnetics::build_model(bodies, bs);
   state = magnetics::State{};
   state.resize(model);

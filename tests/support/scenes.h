@@ -20,6 +20,9 @@ struct Rig {
   std::vector<magnetics::BodySpec> bodies;
   magnetics::Model model;
   magnetics::State state;
+  /// BuildSettings::exact_balls: false cuts permanent spheres into lattice cells (to test the
+  /// lattice on a shape with a closed-form field).
+  bool exact_balls = true;
 
   /// Adds a one-part body; returns its index.
   int add(std::unique_ptr<geometry::Shape> shape, const Material& material, const Pose& part = Pose{});
