@@ -442,7 +442,7 @@ TEST_F(Hostile, CachesWithIndicesOutOfRangeOrBadFramesAreRefused) {
       {"magnetics/cells/volume", 2, -1},         {"magnetics/cells/position", 0, nan},
       {"magnetics/parts/orientation", 0, 0},     {"frames/step", 2, 1},
       {"frames/step", 1, 1},                     {"bodies/center_of_mass", 0, nan},
-      {"bake/status", 0, 99},
+      {"bake/status", 0, 99},                    {"magnetics/cells/ball", 1, 7},
   };
   for (const Case& c : cases) {
     damage(good, bad, [&](hid_t f) {
