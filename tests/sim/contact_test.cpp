@@ -18,7 +18,9 @@ namespace {
 
 // Two 1 cm N42 cubes, magnetized along the line joining them, 2 cm apart (centres), on a table
 // or floating; they snap within ~40 ms. `frames` frames at 1 kHz (or 1/dt when dt is longer).
-std::string snap_scene(double dt, bool table, int frames) {
+// With `balls`, two N42 balls of 5 mm radius (one exact cell each, physics.md §4), centres 15 mm
+// apart.
+std::string snap_scene(double dt, bool table, int frames, bool balls = false, const char* mb = "[1, 0, 0]") {
   const int fps = std::min(1000, static_cast<int>(std::lround(1.0 / dt)));
   std::string s = "magbake: 1\nunits: {length: mm, angle: deg}\n";
   s += "time: {fps: " + std::to_string(fps) + ", frames: [1, " + std::to_string(frames + 1) + "], dt: " + std::to_string(dt) + "}\n";
@@ -26,8 +28,10 @@ std::string snap_scene(double dt, bool table, int frames) {
   s += "materials:\n  N42: {kind: permanent, remanence: 1.3, density: 7500}\n  wood: {kind: none, density: 700}\n";
   s += "bodies:\n";
   if (table) s += "  - {name: table, shape: {box: [200, 200, 10]}, material: wood, motion: static, position: [0, 0, -5]}\n";
-  s += "  - {name: a, shape: {box: [10, 10, 10]}, material: N42, magnetization: [1, 0, 0], position: [-10, 0, 5], friction: 0.5}\n";
-  s += "  - {name: b, shape: {box: [10, 10, 10]}, material: N42, magnetization: [1, 0, 0], position: [10, 0, 5], friction: 0.5}\n";
+  const std::string shape = balls ? "{sphere: {radius: 5}}" : "{box: [10, 10, 10]}";
+  const std::string x = balls ? "7.5" : "10";
+  s += "  - {name: a, shape: " + shape + ", material: N42, magnetization: [1, 0, 0], position: [-" + x + ", 0, 5], friction: 0.5}\n";
+  s += "  - {name: b, shape: " + shape + ", material: N42, magnetization: " + mb + ", position: [" + x + ", 0, 5], friction: 0.5}\n";
   return s;
 }
 
@@ -39,8 +43,8 @@ struct SnapRun {
   Vec3 at_a, at_b;         // centres at t = 0.3 s, m
 };
 
-SnapRun snap(double dt, bool table, int frames) {
-  Bake r(snap_scene(dt, table, frames));
+SnapRun snap(double dt, bool table, int frames, bool balls = false, const char* mb = "[1, 0, 0]") {
+  Bake r(snap_scene(dt, table, frames, balls, mb));
   const int a = table ? 1 : 0, b = a + 1;
   const double e0 = r.sim->measure().total_energy();
   SnapRun out;
@@ -61,7 +65,7 @@ SnapRun snap(double dt, bool table, int frames) {
   }
   out.final_a = r.sim->state().com_position[a];
   out.final_b = r.sim->state().com_position[b];
-  EXPECT_TRUE(met) << "the cubes never met";
+  EXPECT_TRUE(met) << "the magnets never met";
   return out;
 }
 
@@ -95,6 +99,35 @@ TEST(Contact, SnappedCubesStayTogetherAndGainNoEnergy) {
     const double da = (r->at_a - finals[0].at_a).norm(), db = (r->at_b - finals[0].at_b).norm();
     std::printf("positions at 0.3 s against dt 0.1 ms: %.3f mm, %.3f mm\n", 1e3 * da, 1e3 * db);
     EXPECT_LT(std::max(da, db), kConvergenceBound);
+  }
+}
+
+// The same for two ball magnets (curved surfaces touching at a point; each ball one exact
+// cell): on the table and floating, dt 0.1, 1 and 5 ms; b magnetized along the line joining them
+// or turned 53 degrees from it (it turns and rolls while it snaps).
+TEST(Contact, SnappedBallsStayTogetherAndGainNoEnergy) {
+  for (const char* mb : {"[1, 0, 0]", "[0.6, 0.8, 0]"}) {
+    std::vector<SnapRun> finals;
+    for (bool table : {true, false}) {
+      for (double dt : {1e-4, 1e-3, 5e-3}) {
+        const SnapRun run = snap(dt, table, static_cast<int>(std::lround(0.3 / std::max(dt, 1e-3))), true, mb);
+        std::printf("balls, b %s, %s dt %.1f ms: binding %.4f J, largest energy rise after contact %.2e J (%.2f%%), gap %.3f mm\n",
+                    mb, table ? "table" : "space", 1e3 * dt, run.binding, run.worst_rise,
+                    100 * run.worst_rise / run.binding, 1e3 * run.final_gap);
+        EXPECT_GT(run.binding, 0.02);
+        EXPECT_LT(run.worst_rise, kSnapEnergyBound * run.binding) << mb << (table ? " table" : " space") << " dt " << dt;
+        EXPECT_LT(std::abs(run.final_gap), 5e-4) << mb << (table ? " table" : " space") << " dt " << dt;
+        if (table) finals.push_back(run);
+      }
+    }
+    for (int k : {1, 2}) {
+      const double da = (finals[k].at_a - finals[0].at_a).norm(), db = (finals[k].at_b - finals[0].at_b).norm();
+      std::printf("balls, b %s, positions at 0.3 s, dt %s ms against dt 0.1 ms: %.3f mm, %.3f mm\n", mb, k == 1 ? "1" : "5",
+                  1e3 * da, 1e3 * db);
+      if (k == 1) {
+        EXPECT_LT(std::max(da, db), kConvergenceBound) << mb;
+      }
+    }
   }
 }
 
