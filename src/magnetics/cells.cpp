@@ -338,39 +338,21 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
       const double cell = ps.cell_size > 0 ? ps.cell_size : settings.cell_size;
       if (!(cell > 0)) throw std::runtime_error("magnetics: cell_size must be positive");
       double radius = 0;
-      if (settings.exact_balls && chi == 0.0 && M.squaredNorm() > 0 && ps.solid->ball(radius)) {
+      const bool ball = settings.exact_balls && chi == 0.0 && M.squaredNorm() > 0 && ps.solid->ball(radius);
+      PartCells pc;
+      if (ball) {
         // A permanent ball: one exact cell at its centre (BuildSettings::exact_balls).
-        const double v = ps.solid->volume();
         if (budget < 1) {
           throw std::runtime_error("magnetics: the model would exceed " + std::to_string(settings.max_cells) +
                                    " cells; raise magnetics.cell_size");
         }
-        --budget;
-        PartReport rep;
-        rep.body = b;
-        rep.cells = 1;
-        rep.grid_volume = rep.true_volume = v;
-        rep.rescale = 1;
-        cells.body.push_back(b);
-        cells.part.push_back(pid);
-        cells.position.push_back(ps.part_to_body.position);
-        cells.center.push_back(ps.part_to_body.position);
-        cells.half.push_back(Vec3::Constant(radius));
-        cells.moment.push_back(M * v);
-        cells.volume.push_back(v);
-        cells.chi.push_back(0.0);
-        cells.full.push_back(0);
-        cells.ball.push_back(1);
-        parts.body.push_back(b);
-        parts.pose.push_back(ps.part_to_body);
-        parts.magnetization.push_back(M);
-        parts.half.push_back(Vec3::Constant(radius));
-        parts.chi.push_back(0.0);
-        reports.push_back(rep);
-        part_solid.push_back(ps.solid);
-        continue;
+        pc.center = pc.centroid = {Vec3::Zero()};
+        pc.volume = {ps.solid->volume()};
+        pc.full = {0};
+        pc.half = Vec3::Constant(radius);
+      } else {
+        pc = decompose(*ps.solid, cell, settings, budget);
       }
-      PartCells pc = decompose(*ps.solid, cell, settings, budget);
       if (pc.centroid.empty()) {
         throw std::runtime_error("magnetics: body " + std::to_string(b) +
                                  " has a part with no cell inside it; lower magnetics.cell_size");
@@ -393,7 +375,7 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
         cells.volume.push_back(v);
         cells.chi.push_back(chi);
         cells.full.push_back(pc.full[q]);
-        cells.ball.push_back(0);
+        cells.ball.push_back(ball);
         rep.full_cells += pc.full[q];
       }
       parts.body.push_back(b);

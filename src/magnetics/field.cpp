@@ -525,18 +525,19 @@ std::int64_t apply_field_plan(const FieldPlan& plan, const Model& m, const State
         const Mat3& R = s.part_rotation[m.cell_part[c]];
         const Vec3& h = m.cell_half[c];
         const double lim = opt.near_field * 2.0 * h.maxCoeff();
+        if (m.cell_ball[c]) {
+          // A uniformly magnetized ball: its dipole outside, exactly 2/3 mu0 M inside.
+          const Vec3 inside = (2.0 / 3.0) * kMu0 / m.cell_volume[c] * mc;
+          for (int q = tb; q < te; ++q) {
+            if (t.cell[q] == c) continue;
+            const Vec3 rc = t.position[q] - cc;
+            B[q] += rc.squaredNorm() <= h[0] * h[0] ? inside : dipole_field(rc, mc);
+          }
+          continue;
+        }
         for (int q = tb; q < te; ++q) {
           if (t.cell[q] == c) continue;
           const Vec3 rc = t.position[q] - cc;
-          if (m.cell_ball[c]) {
-            // A uniformly magnetized ball: its dipole outside, exactly 2/3 mu0 M inside.
-            if (rc.squaredNorm() <= h[0] * h[0]) {
-              B[q] += (2.0 / 3.0) * kMu0 / m.cell_volume[c] * mc;
-            } else if (rc.squaredNorm() > 0.0) {
-              B[q] += dipole_field(rc, mc);
-            }
-            continue;
-          }
           bool cuboid = opt.near_field > 0.0 && m.cell_full[c] && rc.squaredNorm() < lim * lim;
           if (!cuboid && opt.smear_inside) {
             const Vec3 lc = R.transpose() * rc;
