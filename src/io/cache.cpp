@@ -37,8 +37,8 @@ constexpr Series kObservables[] = {{"kinetic_energy", 1, "kg m2 s-2"},      {"gr
                                    {"induction_iterations", 1, ""},         {"induction_residual", 1, ""},
                                    {"substeps", 1, ""},                     {"energy_drift", 1, "kg m2 s-2"},
                                    {"max_speed", 1, "m s-1"},               {"max_penetration", 1, "m"},
-                                   {"sleeping", 1, ""}};
-constexpr std::size_t kRequiredObservables = 14;  // "sleeping" is optional when read
+                                   {"sleeping", 1, ""},                     {"body_steps", 1, ""}};
+constexpr std::size_t kRequiredObservables = 14;  // "sleeping" and "body_steps" are optional when read
 
 std::vector<double> flat(const std::vector<Vec3>& v) {
   std::vector<double> out;
@@ -344,7 +344,8 @@ void CacheWriter::append(int frame, double time, const sim::SimState& s, const s
                            {d.energy_drift},
                            {d.max_speed},
                            {d.max_penetration},
-                           {double(d.sleeping)}};
+                           {double(d.sleeping)},
+                           {double(d.body_steps)}};
   static_assert(std::size(obs) == std::size(kObservables));
   for (std::size_t k = 0; k < m.observables.size(); ++k) {
     h5::write_row(m.observables[k].id(), H5T_NATIVE_DOUBLE, row, obs[k]);

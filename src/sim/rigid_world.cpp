@@ -387,6 +387,13 @@ void RigidWorld::set_state(const SimState& s) {
   }
 }
 
+void RigidWorld::refresh_pairs() {
+  Impl& m = *impl_;
+  gDbvtMargin = m.dbvt_margin;
+  m.world->updateAabbs();
+  m.world->getBroadphase()->calculateOverlappingPairs(m.world->getDispatcher());
+}
+
 void RigidWorld::get_state(SimState& s) const {
   const Impl& m = *impl_;
   for (std::size_t i = 0; i < m.bodies.size(); ++i) {
@@ -424,8 +431,17 @@ void RigidWorld::keep_awake(int i) {
   b->setDeactivationTime(0);
 }
 
-void RigidWorld::step(double t, double h, const std::vector<Vec3>& force, const std::vector<Vec3>& torque) {
+void RigidWorld::step(double t, double h, const std::vector<Vec3>& force, const std::vector<Vec3>& torque,
+                      const std::vector<std::uint8_t>* held) {
   Impl& m = *impl_;
+  // Held bodies: DISABLE_SIMULATION for this step (Bullet neither integrates nor solves a body
+  // that is not active, and skips islands with no active body); their own activation state and
+  // rest clock are put back afterwards, so holding does not count as resting.
+  struct Saved {
+    int body, state;
+    btScalar rest;
+  };
+  std::vector<Saved> saved;
   for (std::size_t i = 0; i < m.bodies.size(); ++i) {
     const scene::Body& sb = m.scene.bodies[i];
     btRigidBody* b = m.bodies[i].get();
@@ -434,6 +450,11 @@ void RigidWorld::step(double t, double h, const std::vector<Vec3>& force, const 
       const magnetics::Pose p = sb.pose_at(t + h);
       b->setWorldTransform(m.bullet_transform(int(i), p.rotation, p.position + p.rotation * sb.com));
     } else if (sb.motion == scene::Motion::kDynamic) {
+      if (held && (*held)[i]) {
+        saved.push_back({int(i), b->getActivationState(), b->getDeactivationTime()});
+        b->forceActivationState(DISABLE_SIMULATION);
+        continue;
+      }
       // Forces are cleared by every stepSimulation call, which also applies gravity once.
       b->applyCentralForce(bt(force[i]));
       b->applyTorque(bt(torque[i]));
@@ -442,11 +463,53 @@ void RigidWorld::step(double t, double h, const std::vector<Vec3>& force, const 
   gDbvtMargin = m.dbvt_margin;
   if (m.sleep_time > 0) gDeactivationTime = btScalar(m.sleep_time);
   m.world->stepSimulation(h, 0, h);
+  for (const Saved& sv : saved) {
+    btRigidBody* b = m.bodies[sv.body].get();
+    b->forceActivationState(sv.state);
+    b->setDeactivationTime(sv.rest);
+  }
 }
 
-double RigidWorld::closing_rate() const {
+void RigidWorld::rewind_kinematic(double t) {
+  Impl& m = *impl_;
+  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+    const scene::Body& sb = m.scene.bodies[i];
+    if (sb.motion != scene::Motion::kKinematic) continue;
+    const magnetics::Pose p = sb.pose_at(t);
+    const btTransform tr = m.bullet_transform(int(i), p.rotation, p.position + p.rotation * sb.com);
+    btRigidBody* b = m.bodies[i].get();
+    b->setWorldTransform(tr);
+    b->setInterpolationWorldTransform(tr);
+  }
+}
+
+void RigidWorld::islands(std::vector<int>& island) const {
   const Impl& m = *impl_;
-  double rate = 0;
+  const int n = static_cast<int>(m.bodies.size());
+  island.assign(n, -1);
+  for (int i = 0; i < n; ++i) {
+    if (m.scene.bodies[i].motion == scene::Motion::kDynamic) island[i] = i;
+  }
+  auto root = [&](int i) {
+    while (island[i] != i) i = island[i] = island[island[i]];
+    return i;
+  };
+  const btBroadphasePairArray& pairs = m.world->getBroadphase()->getOverlappingPairCache()->getOverlappingPairArray();
+  for (int k = 0; k < pairs.size(); ++k) {
+    const int i = static_cast<const btCollisionObject*>(pairs[k].m_pProxy0->m_clientObject)->getUserIndex();
+    const int j = static_cast<const btCollisionObject*>(pairs[k].m_pProxy1->m_clientObject)->getUserIndex();
+    if (i < 0 || j < 0 || island[i] < 0 || island[j] < 0) continue;
+    const int a = root(i), b = root(j);
+    if (a != b) island[std::max(a, b)] = std::min(a, b);  // the smaller index is the root
+  }
+  for (int i = 0; i < n; ++i) {
+    if (island[i] >= 0) island[i] = root(i);
+  }
+}
+
+void RigidWorld::closing_rates(std::vector<double>& rate) const {
+  const Impl& m = *impl_;
+  rate.assign(m.bodies.size(), 0.0);
   btOverlappingPairCache* cache = m.world->getBroadphase()->getOverlappingPairCache();
   const btBroadphasePairArray& pairs = cache->getOverlappingPairArray();
   for (int k = 0; k < pairs.size(); ++k) {
@@ -480,9 +543,9 @@ double RigidWorld::closing_rate() const {
     const double approach = (b0->getLinearVelocity() - b1->getLinearVelocity()).dot(dir.normalized());
     if (approach <= 0) continue;
     const double length = 0.01 * std::min(m.extent[i], m.extent[j]);
-    rate = std::max(rate, approach / length);
+    rate[i] = std::max(rate[i], approach / length);
+    rate[j] = std::max(rate[j], approach / length);
   }
-  return rate;
 }
 
 RigidWorld::Penetration RigidWorld::deepest_penetration() const {

@@ -1,6 +1,7 @@
 // Bullet (double precision) behind a small interface: one rigid body per scene body.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -20,25 +21,45 @@ class RigidWorld {
 
   /// Puts every body at the state's poses and velocities (initial state or a resumed frame).
   void set_state(const SimState& s);
+  /// Brings Bullet's pair cache up to date with the current poses (bounding boxes and their
+  /// overlaps, no contacts): after set_state() of a resumed frame, so that islands() and
+  /// closing_rates() see the bodies' neighbours before the first step.
+  void refresh_pairs();
   /// Reads poses and velocities back (centre-of-mass frames, body axes).
   void get_state(SimState& s) const;
   /// Advances by h seconds: kinematic bodies move to their keyed pose at t + h (their velocity
   /// follows from the finite difference), dynamic bodies feel gravity plus the given magnetic
   /// forces and torques (world frame, about the centre of mass; held constant over the step).
-  void step(double t, double h, const std::vector<Vec3>& force, const std::vector<Vec3>& torque);
+  /// `held` (optional, per body): dynamic bodies marked 1 are held where they are for this step
+  /// (not moved, no force applied, activation and rest clock kept). Per-island substeps
+  /// (Simulator) step the islands that need short pieces while the others are held, and the
+  /// others in one piece while the first are held; an island whose bodies are all held is not
+  /// solved at all.
+  void step(double t, double h, const std::vector<Vec3>& force, const std::vector<Vec3>& torque,
+            const std::vector<std::uint8_t>* held = nullptr);
+  /// Puts kinematic bodies back at their keyed pose at time t (s), so that a second pass over
+  /// the interval starting at t moves them from there again (their contact velocity is Bullet's
+  /// finite difference of the pose change).
+  void rewind_kinematic(double t);
+  /// Islands of dynamic bodies (scene index of each body's island, the smallest body index in
+  /// it; -1 for static and kinematic bodies): bodies linked through Bullet's pair cache
+  /// (bounding boxes, padded and swept over the last step, that overlap), as Bullet's own
+  /// simulation islands. Bodies of different islands cannot touch within a step.
+  void islands(std::vector<int>& island) const;
 
   /// A pair of bodies (scene indices; b = -1 for none) and how deep they interpenetrate, m.
   struct Penetration {
     int a = -1, b = -1;
     double depth = 0;
   };
-  /// Largest approach speed (m/s, along the line between the centres) over `length` (m) among
+  /// Approach speed (m/s, along the line between the centres) over `length` (m) of the
   /// pairs of bodies whose swept bounding boxes overlapped in the last step (Bullet's pair
   /// cache: bodies that may touch within a step) but are not yet in contact (no contact point
   /// closer than 0.1 mm), both permanent magnets and at least one dynamic; `length` is 1% of the smaller
   /// body's smallest extent. Multiplied by a step h it says how many substeps keep such a pair
-  /// from sinking more than that length into each other at impact (0 when no pair qualifies).
-  double closing_rate() const;
+  /// from sinking more than that length into each other at impact. Per body (s^-1): the
+  /// largest such rate over its pairs, 0 when no pair of it qualifies; `rate` is resized.
+  void closing_rates(std::vector<double>& rate) const;
   /// Deepest penetration among the contact points of the last step's collision detection.
   Penetration deepest_penetration() const;
   /// Contact normals of the last step's collision detection, per scene body: for every manifold

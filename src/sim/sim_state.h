@@ -68,6 +68,10 @@ struct FrameDiagnostics {
   int induction_iterations = 0;      ///< GMRES iterations summed over substeps
   double induction_residual = 0;     ///< largest final residual over the substeps
   int substeps = 0;                  ///< physics substeps taken (more than nominal when refined)
+  /// Bodies stepped, summed over the substeps (a dynamic body that is awake and not held counts
+  /// once per Bullet step): with per-island substeps, body_steps / (dynamic bodies x nominal
+  /// steps) is how much of the world was refined.
+  long long body_steps = 0;
   /// Change of the total energy (kinetic + gravity + magnetic) since the previous frame, J.
   /// Without moving kinematic bodies it should never be clearly positive (contact and friction
   /// only remove energy).

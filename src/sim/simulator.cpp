@@ -76,6 +76,7 @@ void Simulator::restore(const SimState& s, int frame) {
   state_ = s;
   assert(state_.sleep.size() == scene_.bodies.size());  // SimState::resize sizes it (all awake)
   world_->set_state(state_);
+  world_->refresh_pairs();  // islands and closing rates of the first step see the neighbours
   refresh_contacts();
   sleep_reference_set_.assign(scene_.bodies.size(), 0);
   for (std::size_t i = 0; i < state_.sleep.size(); ++i) sleep_reference_set_[i] = state_.sleep[i] == kAsleep;
@@ -91,7 +92,9 @@ void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     mag_state_.body_pose[i] = magnetics::Pose{state_.orientation[i], state_.com_position[i]};
     // Sleeping bodies do not move: their mutual forces come from the fixed-pairs cache.
-    mag_state_.body_fixed[i] = scene_.bodies[i].motion != scene::Motion::kDynamic || state_.sleep[i] == kAsleep;
+    // Held bodies (per-island substeps) do not move while the others take their pieces.
+    mag_state_.body_fixed[i] = scene_.bodies[i].motion != scene::Motion::kDynamic || state_.sleep[i] == kAsleep ||
+                               (holding_ && held_[i]);
   }
   magnetics::evaluate(model_, settings_, mag_state_, mag_result_);
   state_.magnetic_force = mag_result_.force;
@@ -146,7 +149,7 @@ void Simulator::update_sleep(FrameDiagnostics& d) {
   if (woke) evaluate_magnetics(d);
 }
 
-int Simulator::substep_split(double h) const {
+void Simulator::body_splits(double h) {
   // Magnetic stiffness: h sqrt(k/m) <= 0.5 with k = 4|F|/l, l = a quarter of the body's
   // smallest extent (at most 64 pieces). For most bodies |F| includes the pull that a contact
   // carries: leaving it out (resting contact without substeps) made a snapped spinning pair of
@@ -154,7 +157,12 @@ int Simulator::substep_split(double h) const {
   // is explicit too. A body with no magnetic torque (a soft sphere, Model::body_isotropic) has
   // no rotational stiffness, and the part of its pull that presses it into a contact is held by
   // that contact, so only the rest of its force (the part that can move it) counts.
-  int split = 1;
+  // Impact: magnetic bodies that may touch within the step (Bullet's swept pair cache) and close
+  // faster than 1% of the smaller one's size per piece get shorter pieces (at most 256), so a
+  // snapping magnet does not sink into its partner: pushing a deep penetration out against the
+  // magnetic pull is where the old step gained energy (physics.md §8).
+  world_->closing_rates(closing_);
+  split_.assign(scene_.bodies.size(), 0);
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     const scene::Body& b = scene_.bodies[i];
     if (b.motion != scene::Motion::kDynamic || b.mass <= 0 || state_.sleep[i] == kAsleep) continue;
@@ -167,16 +175,59 @@ int Simulator::substep_split(double h) const {
     }
     const double k_lin = 4.0 * free.norm() / stiffness_length_[i];
     const double rate = std::sqrt(k_lin / b.mass);
-    if (rate * h > 0.5) split = std::max(split, static_cast<int>(std::ceil(rate * h / 0.5)));
+    int split = 1;
+    if (rate * h > 0.5) split = std::min(64, static_cast<int>(std::ceil(rate * h / 0.5)));
+    const double closing = closing_[i] * h;
+    if (closing > 1.0) split = std::max(split, std::min(256, static_cast<int>(std::ceil(closing))));
+    split_[i] = split;
   }
-  split = std::min(split, 64);
-  // Impact: magnetic bodies that may touch within the step (Bullet's swept pair cache) and close faster
-  // than 1% of the smaller one's size per piece get shorter pieces (at most 256), so a snapping
-  // magnet does not sink into its partner: pushing a deep penetration out against the magnetic
-  // pull is where the old step gained energy (physics.md §8).
-  const double closing = world_->closing_rate() * h;
-  if (closing > 1.0) split = std::max(split, std::min(256, static_cast<int>(std::ceil(closing))));
+}
+
+int Simulator::largest_split(const std::vector<std::uint8_t>* among) const {
+  int split = 1;
+  for (std::size_t i = 0; i < split_.size(); ++i) {
+    if (!among || (*among)[i]) split = std::max(split, split_[i]);
+  }
   return split;
+}
+
+bool Simulator::split_islands() {
+  if (largest_split(nullptr) <= 1) return false;
+  world_->islands(island_);
+  const std::size_t n = scene_.bodies.size();
+  std::vector<int> need(n, 0);  // per island root
+  for (std::size_t i = 0; i < n; ++i) {
+    if (island_[i] >= 0) need[island_[i]] = std::max(need[island_[i]], split_[i]);
+  }
+  fast_.assign(n, 0);
+  held_.assign(n, 0);
+  bool any_slow = false;  // an awake body that can take the substep in one piece
+  for (std::size_t i = 0; i < n; ++i) {
+    if (island_[i] < 0) continue;
+    fast_[i] = need[island_[i]] > 1;
+    held_[i] = !fast_[i];
+    any_slow = any_slow || (held_[i] && split_[i] > 0);
+  }
+  return any_slow;
+}
+
+void Simulator::step_piece(double t, double hs, const std::vector<std::uint8_t>* held, FrameDiagnostics& d) {
+  const auto tr = Clock::now();
+  world_->step(t, hs, state_.magnetic_force, state_.magnetic_torque, held);
+  world_->get_state(state_);
+  refresh_contacts();
+  if (sleep_) {
+    for (std::size_t i = 0; i < state_.sleep.size(); ++i) {
+      if (state_.sleep[i] != kAsleep) sleep_reference_set_[i] = 0;
+    }
+  }
+  const RigidWorld::Penetration pen = world_->deepest_penetration();
+  if (pen.depth > d.max_penetration) d.max_penetration = pen.depth, d.penetration_a = pen.a, d.penetration_b = pen.b;
+  d.rigid_seconds += seconds_since(tr);
+  ++d.substeps;
+  for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
+    d.body_steps += scene_.bodies[i].motion == scene::Motion::kDynamic && state_.sleep[i] != kAsleep && !(held && (*held)[i]);
+  }
 }
 
 void Simulator::check_finite(int frame) const {
@@ -203,41 +254,50 @@ FrameDiagnostics Simulator::advance_frame() {
   const double h = span / nominal;  // substeps land exactly on frame times
   for (int k = 0; k < nominal; ++k) {
     const double t0 = t_start + k * h;
+    if (k > 0) {  // the first substep reuses the frame's forces
+      evaluate_magnetics(d);
+      update_sleep(d);
+    }
+    body_splits(h);
+    // Islands that need no pieces take the whole substep first, with the others held; then the
+    // others take their pieces with the first held (per-island substeps, physics.md §8).
+    const bool local = split_islands();
+    if (local) {
+      if (after_magnetics_) after_magnetics_(next, state_);
+      check_finite(next);
+      step_piece(t0, h, &fast_, d);
+      world_->rewind_kinematic(t0);
+      holding_ = true;
+    }
+    const std::vector<std::uint8_t>* held = local ? &held_ : nullptr;
+    const std::vector<std::uint8_t>* stepped = local ? &fast_ : nullptr;
     // Each nominal substep is cut into equal pieces, re-decided after every piece from the
     // current forces and speeds (so a magnet accelerating into its partner gets shorter pieces
     // as it closes in), and always ends exactly at t0 + h.
     double done = 0;
     bool first = true;
     while (h - done > 1e-12 * h) {
-      if (!first || k > 0) {  // the first substep reuses the frame's forces
+      if (!first) {
         evaluate_magnetics(d);
         update_sleep(d);
+        body_splits(h);
       }
-      first = false;
       // Piece length the current state needs, then equal pieces over what is left of h.
-      const double target = h / substep_split(h);
+      const double target = h / largest_split(stepped);
       const double remaining = h - done;
       const int pieces = std::max(1, static_cast<int>(std::ceil(remaining / target - 1e-9)));
       const double hs = remaining / pieces;
       const double t = t0 + done;
-      if (after_magnetics_) after_magnetics_(next, state_);
-      check_finite(next);
-      const auto tr = Clock::now();
-      world_->step(t, hs, state_.magnetic_force, state_.magnetic_torque);
-      world_->get_state(state_);
-      refresh_contacts();
-      if (sleep_) {
-        for (std::size_t i = 0; i < state_.sleep.size(); ++i) {
-          if (state_.sleep[i] != kAsleep) sleep_reference_set_[i] = 0;
-        }
+      if (!first || !local) {
+        if (after_magnetics_) after_magnetics_(next, state_);
+        check_finite(next);
       }
-      const RigidWorld::Penetration pen = world_->deepest_penetration();
-      if (pen.depth > d.max_penetration) d.max_penetration = pen.depth, d.penetration_a = pen.a, d.penetration_b = pen.b;
-      d.rigid_seconds += seconds_since(tr);
-      ++d.substeps;
+      first = false;
+      step_piece(t, hs, held, d);
       done = pieces == 1 ? h : done + hs;
       state_.time = t + hs;
     }
+    holding_ = false;
   }
   state_.time = t_end;
   frame_ = next;

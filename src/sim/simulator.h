@@ -35,7 +35,11 @@ class NumericalFault : public std::runtime_error {
 ///  2. the substep is split when the magnetic stiffness would make it unstable
 ///     (h sqrt(k/m) > 0.5 with k = 4|F|/l, l = a quarter of the body's smallest extent) or when
 ///     two bodies about to touch close by more than 1% of their size per piece; the split is
-///     re-decided after every piece;
+///     re-decided after every piece. It is decided per island (RigidWorld::islands(): bodies
+///     that may touch within the step): islands that need no split take the substep in one
+///     piece while the others are held, then the islands that need it take their pieces while
+///     the first are held (and fixed in the magnetics, so their mutual forces are not
+///     recomputed);
 ///  3. Bullet advances one substep with kinematic bodies moved to their keyed pose at t + h;
 ///  4. NaN/Inf anywhere stops with a NumericalFault naming the body and frame;
 ///  5. bodies at rest for Scene::sleep_time fall asleep (Bullet islands); they count as fixed in
@@ -84,8 +88,17 @@ class Simulator {
   /// without contacts whose net force or torque is not negligible has its rest clock restarted
   /// (slow is not balanced). Forces are re-evaluated when a body woke.
   void update_sleep(FrameDiagnostics& d);
-  /// Number of equal pieces a step of h seconds needs from the current state (>= 1).
-  int substep_split(double h) const;
+  /// Pieces each body needs for a step of h seconds from the current state, into split_ (>= 1;
+  /// 0 for bodies that are not stepped: static, kinematic, asleep).
+  void body_splits(double h);
+  /// Largest split_ over the bodies (all of them, or those marked in `among`), at least 1.
+  int largest_split(const std::vector<std::uint8_t>* among) const;
+  /// Decides which islands need pieces: fast_ (their bodies) and held_ (the other dynamic
+  /// bodies); false when no island can be left out (one piece for all, or all need pieces).
+  bool split_islands();
+  /// One Bullet step of hs seconds from time t with the current forces (`held`: bodies held
+  /// still), then the state read back and the step's statistics added to d.
+  void step_piece(double t, double hs, const std::vector<std::uint8_t>* held, FrameDiagnostics& d);
   void check_finite(int frame) const;
 
   const scene::Scene& scene_;
@@ -97,6 +110,11 @@ class Simulator {
   SimState state_;
   int frame_ = 0;
   std::vector<double> stiffness_length_;  // per body, m
+  std::vector<int> split_;                // per body: pieces it needs (body_splits)
+  std::vector<double> closing_;           // per body: RigidWorld::closing_rates, s^-1
+  std::vector<int> island_;               // per body: RigidWorld::islands
+  std::vector<std::uint8_t> fast_, held_; // per body: split_islands()
+  bool holding_ = false;                  // held_ bodies are fixed in the magnetics now
   std::vector<std::uint8_t> contact_exempt_;  // per body: dynamic and without magnetic torque (substep_split)
   bool any_contact_exempt_ = false;
   std::vector<std::vector<Vec3>> contact_normals_;  // per body, of the last step (refresh_contacts())

@@ -224,6 +224,51 @@ TEST(Contact, SteelBallRestingOnAMagnetNeedsNoSubsteps) {
   EXPECT_GT(snap_substeps, 50);
 }
 
+// Per-island substeps (issue 11, outcome 2; physics.md §8): two cube magnets snapping on a table
+// need short pieces; six wooden blocks resting on the same table 6-10 cm away, and a lone magnet
+// 12 cm away, do not, and are not refined with them. The snapping pair moves exactly as it does
+// without the blocks, and the blocks exactly as they do without the magnets (Bullet solves each
+// island on its own, and the held islands are not touched).
+TEST(Contact, OnlyTheIslandThatNeedsPiecesIsRefined) {
+  auto scene = [](bool pair, bool blocks, bool lone) {
+    std::string s = snap_scene(1e-3, true, 60);
+    if (!pair) s = s.substr(0, s.find("  - {name: a,"));
+    if (blocks) {
+      for (int k = 0; k < 6; ++k) {
+        const double x = -20.0 + 20.0 * (k % 3), y = k < 3 ? 60.0 : -60.0 - 40.0 * (k == 4);
+        s += "  - {name: block" + std::to_string(k) + ", shape: {box: [10, 10, 10]}, material: wood, position: [" +
+             std::to_string(x) + ", " + std::to_string(y) + ", 5.01], friction: 0.5}\n";
+      }
+    }
+    if (lone) s += "  - {name: lone, shape: {box: [10, 10, 10]}, material: N42, magnetization: [0, 0, 1], position: [120, 0, 5.01]}\n";
+    return s;
+  };
+  // All; without the blocks; the blocks alone (wood: no magnetic force, whatever is near).
+  Bake all(scene(true, true, true)), magnets(scene(true, false, true)), blocks(scene(false, true, false));
+  long long steps_all = 0, steps_magnets = 0, body_steps_all = 0, body_steps_magnets = 0, body_steps_blocks = 0;
+  int nominal = 0;
+  double pair_diff = 0, block_diff = 0;
+  for (int f = 0; f < 60; ++f) {
+    const FrameDiagnostics da = all.sim->advance_frame(), dm = magnets.sim->advance_frame(), db = blocks.sim->advance_frame();
+    steps_all += da.substeps, body_steps_all += da.body_steps;
+    steps_magnets += dm.substeps, body_steps_magnets += dm.body_steps, body_steps_blocks += db.body_steps;
+    nominal += all.scene.steps_per_frame();
+    for (int i : {1, 2}) pair_diff = std::max(pair_diff, (all.sim->state().com_position[i] - magnets.sim->state().com_position[i]).norm());
+    for (int i = 0; i < 6; ++i) {
+      block_diff = std::max(block_diff, (all.sim->state().com_position[3 + i] - blocks.sim->state().com_position[1 + i]).norm());
+    }
+  }
+  std::printf("snapping pair beside 7 resting bodies: %lld Bullet steps for %d nominal; body steps %lld (without the "
+              "blocks %lld, blocks alone %lld); pair off its run without the blocks by %.2e m, blocks off theirs by %.2e m\n",
+              steps_all, nominal, body_steps_all, body_steps_magnets, body_steps_blocks, pair_diff, block_diff);
+  EXPECT_GT(steps_all, nominal + 20);                                // the snap was refined
+  EXPECT_EQ(body_steps_all, body_steps_magnets + 6LL * nominal);    // the blocks were not
+  EXPECT_EQ(body_steps_blocks, 6LL * nominal);
+  EXPECT_LT(body_steps_magnets, 3 * steps_magnets);  // nor was the lone magnet (3 bodies)
+  EXPECT_LT(pair_diff, 1e-9);
+  EXPECT_LT(block_diff, 1e-12);
+}
+
 // The health summary names an energy rise without a source and a body that left the region.
 TEST(Health, NamesEnergyGrowthAndLostBodies) {
   const scene::Scene sc = scene::load_scene_text(
