@@ -252,6 +252,13 @@ struct RigidWorld::Impl {
     tr.setRotation(bt(Quat(R * principal[b]).normalized()));
     return tr;
   }
+
+  // Bullet transform of body b at its keyed pose at time t (kinematic bodies).
+  btTransform keyed_transform(int b, double t) const {
+    const scene::Body& sb = scene.bodies[b];
+    const magnetics::Pose p = sb.pose_at(t);
+    return bullet_transform(b, p.rotation, p.position + p.rotation * sb.com);
+  }
 };
 
 RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>(scene)) {
@@ -447,8 +454,7 @@ void RigidWorld::step(double t, double h, const std::vector<Vec3>& force, const 
     btRigidBody* b = m.bodies[i].get();
     if (sb.motion == scene::Motion::kKinematic) {
       // The pose at the end of the step; Bullet derives the contact velocity from the change.
-      const magnetics::Pose p = sb.pose_at(t + h);
-      b->setWorldTransform(m.bullet_transform(int(i), p.rotation, p.position + p.rotation * sb.com));
+      b->setWorldTransform(m.keyed_transform(int(i), t + h));
     } else if (sb.motion == scene::Motion::kDynamic) {
       if (held && (*held)[i]) {
         saved.push_back({int(i), b->getActivationState(), b->getDeactivationTime()});
@@ -475,8 +481,7 @@ void RigidWorld::rewind_kinematic(double t) {
   for (std::size_t i = 0; i < m.bodies.size(); ++i) {
     const scene::Body& sb = m.scene.bodies[i];
     if (sb.motion != scene::Motion::kKinematic) continue;
-    const magnetics::Pose p = sb.pose_at(t);
-    const btTransform tr = m.bullet_transform(int(i), p.rotation, p.position + p.rotation * sb.com);
+    const btTransform tr = m.keyed_transform(int(i), t);
     btRigidBody* b = m.bodies[i].get();
     b->setWorldTransform(tr);
     b->setInterpolationWorldTransform(tr);
