@@ -105,6 +105,7 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
   opt.near_field = cache->parameter_doubles("near_field").at(0);
   opt.smear_inside = true;
   opt.single_precision = true;
+  opt.surfaces = true;  // the same field as probe and previews (physics.md §12)
 
   spdlog::info("field volumes: {} x {} x {} voxels of {:.4g} mm over [{:.4g} {:.4g} {:.4g}]-[{:.4g} {:.4g} {:.4g}] m, "
                "frames {}-{} every {}",

@@ -11,6 +11,8 @@
 
 #include "shapes.h"
 
+#include "magnetics/surface_charge.h"
+
 namespace magbake::geometry {
 
 // Bounding volume hierarchy over triangles with the dipole (first-order) far-field terms of the
@@ -36,14 +38,6 @@ namespace {
 
 constexpr int kLeafTriangles = 8;
 constexpr double kBeta = 2.0;  // far-field acceptance: distance > beta * radius
-
-double solid_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
-  // Van Oosterom & Strackee (1983).
-  const double la = a.norm(), lb = b.norm(), lc = c.norm();
-  const double num = a.dot(b.cross(c));
-  const double den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-  return 2.0 * std::atan2(num, den);
-}
 
 }  // namespace
 
@@ -163,23 +157,10 @@ MeshShape::MeshShape(std::vector<Vec3> vertices, std::vector<Eigen::Vector3i> tr
   build(build, 0, 0, static_cast<int>(triangles_.size()));
 }
 
-Vec3 triangle_field(const Vec3& x, const Vec3& a, const Vec3& b, const Vec3& c) {
-  Vec3 n = (b - a).cross(c - a);
-  n.normalize();
-  // Normal part: minus the signed solid angle (positive on the side n points to).
-  Vec3 E = -solid_angle(a - x, b - x, c - x) * n;
-  // In-plane part: outward edge normals times the line integral of 1/R along each edge.
-  const Vec3* v[3] = {&a, &b, &c};
-  for (int e = 0; e < 3; ++e) {
-    const Vec3& p = *v[e];
-    const Vec3& q = *v[(e + 1) % 3];
-    const Vec3 t = (q - p).normalized();
-    const double s1 = (p - x).dot(t), s2 = (q - x).dot(t);
-    const double r1 = (p - x).norm(), r2 = (q - x).norm();
-    const double L = s1 > 0 ? std::log((r2 + s2) / (r1 + s1)) : std::log((r1 - s1) / (r2 - s2));
-    E += L * t.cross(n);
-  }
-  return E;
+bool MeshShape::surface(double, std::vector<Vec3>& vertices, std::vector<Eigen::Vector3i>& triangles) const {
+  vertices = vertices_;
+  triangles = triangles_;
+  return true;
 }
 
 bool MeshShape::demag_tensor(const Vec3& p, Mat3& D) const {
@@ -233,7 +214,7 @@ double MeshShape::winding_number(const Vec3& p) const {
     if (n.child < 0) {
       for (int q = n.begin; q < n.end; ++q) {
         const auto& t = triangles_[bvh_->order[q]];
-        w += solid_angle(vertices_[t[0]] - p, vertices_[t[1]] - p, vertices_[t[2]] - p);
+        w += magnetics::solid_angle(vertices_[t[0]] - p, vertices_[t[1]] - p, vertices_[t[2]] - p);
       }
       continue;
     }

@@ -1,5 +1,6 @@
 #include "shapes.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -63,17 +64,21 @@ MassProperties CylinderShape::mass_properties() const {
   return mp;
 }
 
-std::shared_ptr<const MeshShape> CylinderShape::triangulate(int n) const {
-  std::vector<Vec3> v;
-  std::vector<Eigen::Vector3i> t;
+namespace {
+
+// A prism of height h on the regular n-gon with corners at radius r, axis z, centred: corners
+// and outward triangles (caps as fans about their centres).
+void prism(double r, double h, int n, std::vector<Vec3>& v, std::vector<Eigen::Vector3i>& t) {
+  v.clear();
+  t.clear();
   for (int i = 0; i < n; ++i) {
     const double a = 2 * kPi * i / n;
-    v.emplace_back(r_ * std::cos(a), r_ * std::sin(a), -0.5 * h_);
-    v.emplace_back(r_ * std::cos(a), r_ * std::sin(a), 0.5 * h_);
+    v.emplace_back(r * std::cos(a), r * std::sin(a), -0.5 * h);
+    v.emplace_back(r * std::cos(a), r * std::sin(a), 0.5 * h);
   }
   const int bottom = static_cast<int>(v.size());
-  v.emplace_back(0, 0, -0.5 * h_);
-  v.emplace_back(0, 0, 0.5 * h_);
+  v.emplace_back(0, 0, -0.5 * h);
+  v.emplace_back(0, 0, 0.5 * h);
   for (int i = 0; i < n; ++i) {
     const int j = (i + 1) % n;
     t.emplace_back(2 * i, 2 * j, 2 * j + 1);
@@ -81,7 +86,53 @@ std::shared_ptr<const MeshShape> CylinderShape::triangulate(int n) const {
     t.emplace_back(bottom, 2 * j, 2 * i);
     t.emplace_back(bottom + 1, 2 * i + 1, 2 * j + 1);
   }
+}
+
+}  // namespace
+
+std::shared_ptr<const MeshShape> CylinderShape::triangulate(int n) const {
+  std::vector<Vec3> v;
+  std::vector<Eigen::Vector3i> t;
+  prism(r_, h_, n, v, t);
   return std::make_shared<const MeshShape>(std::move(v), std::move(t));
+}
+
+namespace {
+
+// Segments around a circle of radius r whose chords stay within `tolerance` of it (sagitta),
+// between 12 and 1024.
+int circle_segments(double r, double tolerance) {
+  if (!(tolerance > 0.0) || tolerance >= r) return 12;
+  const double n = std::ceil(kPi / std::acos(1.0 - tolerance / r));
+  return static_cast<int>(std::clamp(n, 12.0, 1024.0));
+}
+
+}  // namespace
+
+bool BoxShape::surface(double, std::vector<Vec3>& vertices, std::vector<Eigen::Vector3i>& triangles) const {
+  Tessellation t = tessellate(*this);
+  vertices = std::move(t.vertices);
+  triangles = std::move(t.triangles);
+  return true;
+}
+
+bool CylinderShape::surface(double tolerance, std::vector<Vec3>& vertices,
+                            std::vector<Eigen::Vector3i>& triangles) const {
+  // A prism on a regular n-gon whose area is the circle's (corners at r sqrt(2pi / (n sin 2pi/n))),
+  // so it encloses the exact volume and carries the exact moment; the polygon then crosses the
+  // circle, within half a sagitta of it on either side.
+  const int n = circle_segments(r_, tolerance);
+  prism(r_ * std::sqrt(2.0 * kPi / (n * std::sin(2.0 * kPi / n))), h_, n, vertices, triangles);
+  return true;
+}
+
+bool TorusShape::surface(double tolerance, std::vector<Vec3>& vertices, std::vector<Eigen::Vector3i>& triangles) const {
+  // Around the axis the outer equator (radius R + r) sets the segments; around the tube, r.
+  const int n = std::max(circle_segments(R_ + r_, tolerance), 2 * circle_segments(r_, tolerance));
+  const std::shared_ptr<const MeshShape> mesh = triangulate(n);
+  vertices = mesh->vertices();
+  triangles = mesh->triangles();
+  return true;
 }
 
 bool CylinderShape::demag_tensor(const Vec3& p, Mat3& D) const {

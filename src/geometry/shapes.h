@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "magnetics/solid.h"
+#include "magnetics/surface_charge.h"
 #include "magnetics/types.h"
 
 namespace magbake::geometry {
@@ -45,6 +46,7 @@ class BoxShape final : public Shape {
   double volume() const override { return 8.0 * half_.prod(); }
   bool contains(const Vec3& p) const override;
   bool is_box() const override { return true; }
+  bool surface(double tolerance, std::vector<Vec3>& vertices, std::vector<Eigen::Vector3i>& triangles) const override;
   bool demag_tensor(const Vec3& p, Mat3& D) const override;
   ShapeKind kind() const override { return ShapeKind::kBox; }
   MassProperties mass_properties() const override;
@@ -83,6 +85,7 @@ class CylinderShape final : public Shape {
   bool contains(const Vec3& p) const override;
   bool demag_tensor(const Vec3& p, Mat3& D) const override;
   ShapeKind kind() const override { return ShapeKind::kCylinder; }
+  bool surface(double tolerance, std::vector<Vec3>& vertices, std::vector<Eigen::Vector3i>& triangles) const override;
   MassProperties mass_properties() const override;
   double radius() const { return r_; }
   double height() const { return h_; }
@@ -104,6 +107,7 @@ class TorusShape final : public Shape {
   bool contains(const Vec3& p) const override;
   bool demag_tensor(const Vec3& p, Mat3& D) const override;
   ShapeKind kind() const override { return ShapeKind::kTorus; }
+  bool surface(double tolerance, std::vector<Vec3>& vertices, std::vector<Eigen::Vector3i>& triangles) const override;
   MassProperties mass_properties() const override;
   double major() const { return R_; }
   double minor() const { return r_; }
@@ -126,10 +130,8 @@ struct Tessellation {
 /// Tessellates any shape: `segments` around curved axes (meshes are returned as they are).
 Tessellation tessellate(const Shape& shape, int segments = 48);
 
-/// Field integral E(x) = ∫_T (x - y) / |x - y|³ dA_y of a flat triangle (a, b, c) (unit charge
-/// density; multiply by sigma / 4pi for H). Closed form: solid angle along the normal plus one
-/// logarithm per edge in the plane. Singular only on the triangle's edges.
-Vec3 triangle_field(const Vec3& x, const Vec3& a, const Vec3& b, const Vec3& c);
+/// The field integral of a flat triangle (magnetics/surface_charge.h); mesh demag tensors use it.
+using magnetics::triangle_field;
 
 class MeshShape final : public Shape {
  public:
@@ -145,6 +147,7 @@ class MeshShape final : public Shape {
   Box3 bounds() const override { return bounds_; }
   double volume() const override { return mass_.volume; }
   bool contains(const Vec3& p) const override { return winding_number(p) > 0.5; }
+  bool surface(double tolerance, std::vector<Vec3>& vertices, std::vector<Eigen::Vector3i>& triangles) const override;
   /// Sum of the exact fields of the uniformly charged faces (far clusters as point charges).
   bool demag_tensor(const Vec3& p, Mat3& D) const override;
   ShapeKind kind() const override { return ShapeKind::kMesh; }

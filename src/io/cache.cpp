@@ -248,6 +248,11 @@ CacheWriter::CacheWriter(const std::string& path, const scene::Scene& sc, const 
     h5::write_doubles(p.id(), "magnetization", {np, 3}, flat(parts.magnetization).data(), "A m-1");
     h5::write_doubles(p.id(), "half", {np, 3}, flat(parts.half).data(), "m");
     h5::write_doubles(p.id(), "chi", {np}, parts.chi.data());
+    if (!parts.surface_begin.empty()) {  // exact surfaces of permanent parts (physics.md §12)
+      std::vector<std::int64_t> sb(parts.surface_begin.begin(), parts.surface_begin.end());
+      h5::write_ints(p.id(), "surface_begin", {np + 1}, sb.data());
+      h5::write_doubles(p.id(), "surface_vertex", {parts.surface_vertex.size(), 3}, flat(parts.surface_vertex).data(), "m");
+    }
     std::vector<std::int64_t> ind(model.induced_cells.begin(), model.induced_cells.end());
     h5::write_ints(g.id(), "induced_cells", {ind.size()}, ind.data());
     m.ninduced = ind.size();
@@ -634,6 +639,10 @@ magnetics::Model CacheReader::model(std::vector<int>* induced_order) const {
   parts.magnetization = v3(h5::read_doubles(f, "magnetics/parts/magnetization"));
   parts.half = v3(h5::read_doubles(f, "magnetics/parts/half"));
   parts.chi = h5::read_doubles(f, "magnetics/parts/chi");
+  if (h5::exists(f, "magnetics/parts/surface_begin")) {  // absent in caches written before surfaces
+    for (auto x : h5::read_ints(f, "magnetics/parts/surface_begin")) parts.surface_begin.push_back(int(x));
+    parts.surface_vertex = v3(h5::read_doubles(f, "magnetics/parts/surface_vertex"));
+  }
   std::vector<int> order;
   magnetics::Model m = magnetics::model_from_cells(static_cast<int>(names_.size()), cells, parts, 32, &order);
   if (induced_order) {

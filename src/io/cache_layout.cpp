@@ -115,6 +115,26 @@ CacheLayout check_cache_layout(hid_t f, std::int64_t frames_done) {
   doubles(f, "magnetics/parts/magnetization", {np, 3});
   doubles(f, "magnetics/parts/half", {np, 3});
   doubles(f, "magnetics/parts/chi", {np});
+  // Optional (caches before exact surfaces lack them): both or neither, ranges that tile the
+  // triangles in order, and triangles with an area (their normals give the charge densities).
+  if (h5::exists(f, "magnetics/parts/surface_begin") || h5::exists(f, "magnetics/parts/surface_vertex")) {
+    const std::vector<std::int64_t> sb = ints(f, "magnetics/parts/surface_begin", {np + 1});
+    const hsize_t nv = expect(f, "magnetics/parts/surface_vertex", {kAny, 3})[0];
+    if (nv % 3 != 0) fail("/magnetics/parts/surface_vertex holds " + std::to_string(nv) + " rows, not 3 per triangle");
+    if (sb[0] != 0 || sb[np] != std::int64_t(nv / 3)) {
+      fail("/magnetics/parts/surface_begin must run from 0 to the " + std::to_string(nv / 3) + " triangles");
+    }
+    for (hsize_t i = 0; i < np; ++i) {
+      if (sb[i + 1] < sb[i]) fail("/magnetics/parts/surface_begin decreases at element " + std::to_string(i + 1));
+    }
+    const std::vector<double> v = doubles(f, "magnetics/parts/surface_vertex", {nv, 3});
+    for (hsize_t t = 0; t < nv / 3; ++t) {
+      const double* a = &v[9 * t];
+      const double e1[3] = {a[3] - a[0], a[4] - a[1], a[5] - a[2]}, e2[3] = {a[6] - a[0], a[7] - a[1], a[8] - a[2]};
+      const double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2], cz = e1[0] * e2[1] - e1[1] * e2[0];
+      if (!(cx * cx + cy * cy + cz * cz > 0)) fail("/magnetics/parts/surface_vertex: triangle " + std::to_string(t) + " has no area");
+    }
+  }
   L.cells = expect(f, "magnetics/cells/body", {kAny})[0];
   const hsize_t nc = L.cells;
   const std::vector<std::int64_t> cell_body = ints(f, "magnetics/cells/body", {nc});

@@ -143,6 +143,7 @@ struct TreeBuilder {
     m.node_reach.push_back(0);
     m.node_moment.push_back(Vec3::Zero());
     m.node_induced.push_back(0);
+    m.node_part.push_back(-1);
     return m.node_count() - 1;
   }
 
@@ -154,9 +155,11 @@ struct TreeBuilder {
     Vec3 c = Vec3::Zero(), mom = Vec3::Zero();
     double rmax = 0;
     bool induced = false;
+    int part = begin < end ? bc.part[perm[begin]] : -1;
     Box3 bb;
     for (int q = begin; q < end; ++q) {
       const int id = perm[q];
+      if (bc.part[id] != part) part = -1;
       v += bc.vol[id];
       c += bc.vol[id] * bc.pos[id];
       mom += bc.mom[id];
@@ -175,6 +178,7 @@ struct TreeBuilder {
     m.node_reach[node] = rmax;
     m.node_moment[node] = mom;
     m.node_induced[node] = induced;
+    m.node_part[node] = part;
     if (end - begin <= leaf_size) return;
 
     // Bisect at the middle along every axis at least 0.6 times the longest one (up to 8
@@ -215,6 +219,38 @@ struct TreeBuilder {
   }
 };
 
+// Copies the parts' surfaces into the model with each triangle's charge density and a bounding
+// sphere per part.
+void set_surfaces(Model& m, const PartTable& parts) {
+  const int np = static_cast<int>(parts.body.size());
+  if (parts.surface_begin.empty() || parts.surface_begin.back() == 0) return;
+  assert(static_cast<int>(parts.surface_begin.size()) == np + 1);
+  m.part_surface_begin = parts.surface_begin;
+  m.surface_vertex = parts.surface_vertex;
+  m.surface_sigma.assign(parts.surface_begin.back(), 0.0);
+  m.part_surface_center.assign(np, Vec3::Zero());
+  m.part_surface_radius.assign(np, 0.0);
+  m.part_surface_mesh.assign(np, SurfaceMesh{});
+  for (int p = 0; p < np; ++p) {
+    const int t0 = parts.surface_begin[p], t1 = parts.surface_begin[p + 1];
+    if (t0 == t1) continue;
+    Box3 bb;
+    for (int t = t0; t < t1; ++t) {
+      const Vec3 &a = m.surface_vertex[3 * t], &b = m.surface_vertex[3 * t + 1], &c = m.surface_vertex[3 * t + 2];
+      m.surface_sigma[t] = parts.magnetization[p].dot((b - a).cross(c - a).normalized());
+      bb.extend(a), bb.extend(b), bb.extend(c);
+    }
+    const Vec3 c = bb.center();
+    double r = 0;
+    for (int k = 3 * t0; k < 3 * t1; ++k) r = std::max(r, (m.surface_vertex[k] - c).norm());
+    m.part_surface_center[p] = c;
+    m.part_surface_radius[p] = r;
+    if (!m.part_surface_mesh[p].build(&m.surface_vertex[3 * t0], &m.surface_sigma[t0], t1 - t0, parts.magnetization[p])) {
+      throw std::runtime_error("magnetics: the surface of part " + std::to_string(p) + " is not closed");
+    }
+  }
+}
+
 }  // namespace
 
 Model model_from_cells(int body_count, const CellTable& cells, const PartTable& parts, int leaf_size,
@@ -237,6 +273,7 @@ Model model_from_cells(int body_count, const CellTable& cells, const PartTable& 
     if (parts.magnetization[p].squaredNorm() > 0) m.body_permanent[parts.body[p]] = 1;
     if (parts.chi[p] != 0.0) m.body_induced[parts.body[p]] = 1;
   }
+  set_surfaces(m, parts);
   // Cells of each body, in the given order, then the body's hierarchy.
   std::vector<std::vector<int>> of_body(body_count);
   for (std::size_t c = 0; c < cells.size(); ++c) of_body[cells.body[c]].push_back(static_cast<int>(c));
@@ -319,6 +356,10 @@ void model_tables(const Model& m, CellTable& cells, PartTable& parts) {
   parts.magnetization = m.part_magnetization;
   parts.half = m.part_half;
   parts.chi = m.part_chi;
+  if (m.has_surfaces()) {
+    parts.surface_begin = m.part_surface_begin;
+    parts.surface_vertex = m.surface_vertex;
+  }
 }
 
 Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& settings) {
@@ -327,6 +368,7 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
   std::vector<const Solid*> part_solid;
   std::vector<PartReport> reports;
   std::int64_t budget = settings.max_cells;
+  parts.surface_begin.push_back(0);
   for (int b = 0; b < static_cast<int>(bodies.size()); ++b) {
     for (const PartSpec& ps : bodies[b].parts) {
       if (ps.material.kind == MaterialKind::kNone) continue;
@@ -383,6 +425,18 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
       parts.magnetization.push_back(M);
       parts.half.push_back(pc.half);
       parts.chi.push_back(chi);
+      // The exact surface of a permanent part that its cells do not fit (physics.md §12).
+      if (settings.surface_tolerance > 0 && !ball && chi == 0.0 && M.squaredNorm() > 0 && rep.full_cells < rep.cells) {
+        std::vector<Vec3> v;
+        std::vector<Eigen::Vector3i> tri;
+        if (ps.solid->surface(settings.surface_tolerance, v, tri) && !tri.empty() &&
+            static_cast<int>(tri.size()) <= settings.max_surface_triangles) {
+          for (const auto& t : tri) {
+            for (int k = 0; k < 3; ++k) parts.surface_vertex.push_back(ps.part_to_body.apply(v[t[k]]));
+          }
+        }
+      }
+      parts.surface_begin.push_back(static_cast<int>(parts.surface_vertex.size() / 3));
       reports.push_back(rep);
       part_solid.push_back(ps.solid);
     }

@@ -10,6 +10,7 @@
 #include "local_expansion.h"
 #include "parallel.h"
 #include "simd_rsqrt.h"
+#include "surface_charge.h"
 
 #if defined(__AVX2__) && defined(__FMA__)
 #include <immintrin.h>
@@ -288,7 +289,22 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
   plan.far_end.assign(std::max(ngroup, 0), 0);
   plan.near_begin.assign(std::max(ngroup, 0), 0);
   plan.near_end.assign(std::max(ngroup, 0), 0);
+  plan.surface_begin.assign(std::max(ngroup, 0), 0);
+  plan.surface_end.assign(std::max(ngroup, 0), 0);
   if (bt.empty() || ngroup <= 0) return plan;
+  // Parts with an exact surface, by body.
+  std::vector<int> surf_begin(m.body_count + 1, 0), surf_part;
+  if (opt.surfaces && m.has_surfaces()) {
+    for (int p = 0; p < static_cast<int>(m.part_body.size()); ++p) {
+      if (m.surface_triangles(p) > 0) ++surf_begin[m.part_body[p] + 1];
+    }
+    for (int b = 0; b < m.body_count; ++b) surf_begin[b + 1] += surf_begin[b];
+    surf_part.resize(surf_begin[m.body_count]);
+    std::vector<int> fill(surf_begin.begin(), surf_begin.end() - 1);
+    for (int p = 0; p < static_cast<int>(m.part_body.size()); ++p) {
+      if (m.surface_triangles(p) > 0) surf_part[fill[m.part_body[p]]++] = p;
+    }
+  }
   BodyTreeSources agg;
   agg.aggregate(bt, m, src);
   BodyTree& tt = plan.target_tree;
@@ -306,6 +322,7 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
   std::vector<std::vector<std::pair<int, int>>> walk_near(ntask);
   std::vector<std::vector<FieldPlan::Far>> far(ntask);
   std::vector<std::vector<int>> near(ntask);
+  std::vector<std::vector<int>> surface(ntask);
   parallel_for_each(ntask, 1, [&](int k) {
     std::vector<std::pair<int, int>> stack{{plan.roots[k], 0}};
     while (!stack.empty()) {
@@ -361,6 +378,7 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
       int stk[128];
       plan.far_begin[g] = static_cast<int>(far[k].size());
       plan.near_begin[g] = static_cast<int>(near[k].size());
+      plan.surface_begin[g] = static_cast<int>(surface[k].size());
       for (int e = start[q - q0]; e < start[q - q0 + 1]; ++e) {
         const int body = wn[e];
         if (body < 0) {
@@ -368,14 +386,28 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
           continue;
         }
         const Vec3 origin = s.body_pose[body].position;
+        // A surface part that the group would open gives its exact field, and its cells none.
+        constexpr int kMaxSurfaces = 16;
+        int excl[kMaxSurfaces], nexcl = 0;
+        for (int i = surf_begin[body]; i < surf_begin[body + 1] && nexcl < kMaxSurfaces; ++i) {
+          const int p = surf_part[i];
+          const double dp = (origin + s.body_rotation[body] * m.part_surface_center[p] - gc).norm();
+          if (m.part_surface_radius[p] + gr < opt.theta * dp) continue;
+          excl[nexcl++] = p;
+          surface[k].push_back(p);
+        }
+        auto excluded = [&](int part) { return std::find(excl, excl + nexcl, part) != excl + nexcl; };
         int top = 0;
         stk[top++] = m.body_root[body];
         while (top > 0) {
           const int n = stk[--top];
           if (!src.node_active[n]) continue;
+          // A node of excluded cells only is skipped; one of several parts is opened.
+          if (nexcl > 0 && m.node_part[n] >= 0 && excluded(m.node_part[n])) continue;
           const double dn = (origin + s.node_offset[n] - gc).norm();
           const double rn = m.node_radius[n];
-          if (rn + gr < opt.theta * dn && dn - rn - gr > opt.near_field * 2.0 * m.node_reach[n]) {
+          if ((nexcl == 0 || m.node_part[n] >= 0) && rn + gr < opt.theta * dn &&
+              dn - rn - gr > opt.near_field * 2.0 * m.node_reach[n]) {
             far[k].push_back({FieldPlan::kCellNode, n});  // the node acts as one dipole at its centre
             continue;
           }
@@ -387,7 +419,7 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
           }
           // Leaf: cells that may be near some target are decided per target; the rest are dipoles.
           for (int c = m.node_begin[n]; c < m.node_end[n]; ++c) {
-            if (src.cell[c].squaredNorm() == 0.0) continue;
+            if (src.cell[c].squaredNorm() == 0.0 || (nexcl > 0 && excluded(m.cell_part[c]))) continue;
             const Vec3 xc = origin + s.cell_offset[c];
             // A ball cell's field is its dipole outside and uniform inside (its reach).
             const double lim = m.cell_ball[c] ? m.cell_reach[c]
@@ -407,6 +439,7 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
       }
       plan.far_end[g] = static_cast<int>(far[k].size());
       plan.near_end[g] = static_cast<int>(near[k].size());
+      plan.surface_end[g] = static_cast<int>(surface[k].size());
     }
   });
   // Flatten, in a fixed order.
@@ -414,18 +447,26 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
   for (int k = 0; k < ntask; ++k) plan.local_begin[k + 1] = plan.local_begin[k] + static_cast<int>(locals[k].size());
   plan.local_pair.reserve(plan.local_begin[ntask]);
   for (auto& l : locals) plan.local_pair.insert(plan.local_pair.end(), l.begin(), l.end());
-  std::size_t nfar = 0, nnear = 0;
-  for (int k = 0; k < ntask; ++k) nfar += far[k].size(), nnear += near[k].size();
+  std::size_t nfar = 0, nnear = 0, nsurf = 0;
+  for (int k = 0; k < ntask; ++k) nfar += far[k].size(), nnear += near[k].size(), nsurf += surface[k].size();
+  plan.surface.reserve(nsurf);
   plan.far.reserve(nfar);
   plan.near.reserve(nnear);
   for (int k = 0; k < ntask; ++k) {
     const int f0 = static_cast<int>(plan.far.size()), n0 = static_cast<int>(plan.near.size());
+    const int s0 = static_cast<int>(plan.surface.size());
     for (int q = tt.begin[plan.roots[k]]; q < tt.end[plan.roots[k]]; ++q) {
       const int g = tt.order[q];
       plan.far_begin[g] += f0, plan.far_end[g] += f0, plan.near_begin[g] += n0, plan.near_end[g] += n0;
+      plan.surface_begin[g] += s0, plan.surface_end[g] += s0;
       const std::int64_t n = t.group_begin[g + 1] - t.group_begin[g];
       plan.pairs += n * std::int64_t(plan.far_end[g] - plan.far_begin[g] + plan.near_end[g] - plan.near_begin[g]);
+      for (int e = plan.surface_begin[g]; e < plan.surface_end[g]; ++e) {
+        plan.pairs += n * m.surface_triangles(surface[k][e - s0]);
+      }
     }
+    plan.surface.insert(plan.surface.end(), surface[k].begin(), surface[k].end());
+    std::vector<int>().swap(surface[k]);
     plan.far.insert(plan.far.end(), far[k].begin(), far[k].end());
     plan.near.insert(plan.near.end(), near[k].begin(), near[k].end());
     std::vector<FieldPlan::Far>().swap(far[k]);
@@ -484,6 +525,7 @@ std::int64_t apply_field_plan(const FieldPlan& plan, const Model& m, const State
     std::vector<int> down{plan.roots[k]};
     std::vector<Source> far;
     std::vector<Vec3> rel;
+    std::vector<double> corner_distance;
     while (!down.empty()) {
       const int x = down.back();
       down.pop_back();
@@ -513,6 +555,17 @@ std::int64_t apply_field_plan(const FieldPlan& plan, const Model& m, const State
         dipoles_f32(far, rel, n, B.data() + tb);
       } else {
         dipoles_f64(far, rel, n, B.data() + tb);
+      }
+      // Exact surfaces of permanent parts, in the body frame.
+      for (int e = plan.surface_begin[g]; e < plan.surface_end[g]; ++e) {
+        const int p = plan.surface[e];
+        const int body = m.part_body[p];
+        const Vec3& origin = s.body_pose[body].position;
+        const Mat3& Rb = s.body_rotation[body];
+        for (int q = tb; q < te; ++q) {
+          const Vec3 xb = Rb.transpose() * (t.position[q] - origin);
+          B[q] += Rb * m.part_surface_mesh[p].b_field(xb, corner_distance);
+        }
       }
       // Near cells, target by target, in double: exact cuboids, smeared cuboids inside, dipoles.
       for (int e = plan.near_begin[g]; e < plan.near_end[g]; ++e) {

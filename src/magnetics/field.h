@@ -20,6 +20,11 @@ struct FieldOptions {
   /// Far and leaf dipoles in single precision (AVX2, 8 targets per instruction); near cells,
   /// sums and everything else in double. (Either way a target that is a cell skips itself.)
   bool single_precision = false;
+  /// Permanent parts with an exact surface (Model::has_surfaces) whose cells a target group would
+  /// open give their surface-charge field instead (exact up to the tessellation, inside them too:
+  /// surface_charge.h). Only for sources that hold the permanent moments (State::total or
+  /// State::permanent), since the surfaces carry the model's permanent magnetization.
+  bool surfaces = false;
 };
 
 /// The interaction lists of one field evaluation (field.cpp's dual walk): which far groups of
@@ -43,6 +48,8 @@ struct FieldPlan {
   std::vector<Far> far;                         ///< the groups' lists in target-tree order
   std::vector<int> near_begin, near_end;        ///< (ngroup) range of group g in near
   std::vector<int> near;                        ///< cells evaluated target by target
+  std::vector<int> surface_begin, surface_end;  ///< (ngroup) range of group g in surface
+  std::vector<int> surface;                     ///< parts whose exact surface field each group sums
   std::int64_t pairs = 0;                       ///< source–target evaluations of one application
 };
 

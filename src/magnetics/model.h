@@ -10,6 +10,7 @@
 
 #include "material.h"
 #include "solid.h"
+#include "surface_charge.h"
 #include "types.h"
 
 namespace magbake::magnetics {
@@ -51,6 +52,14 @@ struct BuildSettings {
   /// on it are those on the point dipole (the mean-value property of harmonic fields, physics.md
   /// §4). false = the ball is cut into lattice cells like any other solid (validation only).
   bool exact_balls = true;
+  /// A permanent part whose solid has a surface (Solid::surface) and cells that do not all fit it
+  /// (a cylinder, torus or mesh magnet; not a box, not an exact ball) keeps that surface,
+  /// tessellated within this distance (m) of the true one: near it, field_at_targets with
+  /// FieldOptions::surfaces takes the part's exact surface-charge field instead of its cells'
+  /// (physics.md §12). 0 = no surfaces (cells only).
+  double surface_tolerance = 0.0;
+  /// A part keeps its surface only up to this many triangles (field cost per target near it).
+  int max_surface_triangles = 20000;
 };
 
 /// Per-part statistics of the decomposition.
@@ -87,6 +96,18 @@ struct Model {
   std::vector<std::uint8_t> part_consistent;  ///< induced part whose cells are corrected to be
                                          ///< exact for uniform magnetization (its solid has demag_tensor)
   std::vector<PartReport> part_report;
+  // Exact surfaces of permanent parts (BuildSettings::surface_tolerance): triangles of part p are
+  // [part_surface_begin[p], part_surface_begin[p+1]); triangle t has corners surface_vertex[3t..3t+2]
+  // (body frame, m, counter-clockwise seen from outside) and charge density surface_sigma[t] =
+  // M . n (A/m). A part with no triangles has no surface. Empty vectors: no part has one.
+  std::vector<int> part_surface_begin;   ///< (npart + 1)
+  std::vector<Vec3> surface_vertex;      ///< (3 ntri x 3) body frame, m
+  std::vector<double> surface_sigma;     ///< (ntri) A/m
+  std::vector<Vec3> part_surface_center; ///< (npart x 3) centre of a sphere around the surface, body frame, m
+  std::vector<double> part_surface_radius;  ///< (npart) its radius, m (0 without a surface)
+  std::vector<SurfaceMesh> part_surface_mesh;  ///< (npart) the same triangles prepared for evaluation
+  bool has_surfaces() const { return !surface_sigma.empty(); }
+  int surface_triangles(int p) const { return has_surfaces() ? part_surface_begin[p + 1] - part_surface_begin[p] : 0; }
 
   // ---- cells (ncell), ordered so every node's cells are contiguous
   std::vector<Vec3> cell_position;       ///< (ncell x 3) where the moment sits (centroid of the
@@ -135,6 +156,7 @@ struct Model {
   std::vector<double> node_reach;        ///< (nnode) largest cell_reach below the node, m
   std::vector<Vec3> node_moment;         ///< (nnode x 3) summed permanent moment, body frame, A·m²
   std::vector<std::uint8_t> node_induced;///< (nnode) node holds induced cells
+  std::vector<int> node_part;            ///< (nnode) the one part every cell below belongs to, -1 if several
 
   int cell_count() const { return static_cast<int>(cell_position.size()); }
   int node_count() const { return static_cast<int>(node_begin.size()); }
@@ -160,6 +182,9 @@ struct PartTable {
   std::vector<Vec3> magnetization;   ///< permanent M, body frame, A/m
   std::vector<Vec3> half;            ///< cell half-edges, part frame, m
   std::vector<double> chi;
+  /// Model::part_surface_begin and surface_vertex (body frame); empty = no surfaces.
+  std::vector<int> surface_begin;
+  std::vector<Vec3> surface_vertex;
 };
 
 /// Builds the hierarchies over given cells (no induction data: polarizabilities stay zero).

@@ -1,6 +1,8 @@
 // The one thing the cell builder needs to know about a shape: where it is.
 #pragma once
 
+#include <vector>
+
 #include "types.h"
 
 namespace magbake::magnetics {
@@ -23,6 +25,18 @@ class Solid {
   /// the builder gives a permanent ball one exact cell (BuildSettings::exact_balls).
   virtual bool ball(double& radius) const {
     (void)radius;
+    return false;
+  }
+  /// A closed triangulation of the region's boundary in its own frame (m): triangle t has the
+  /// corners vertices[triangles[t][k]], counter-clockwise seen from outside. A curved solid is
+  /// tessellated so that its true surface stays within `tolerance` (m) of the triangles, with the
+  /// exact volume enclosed where that is cheap. A permanent part with a surface gets the exact
+  /// field of its surface charge near it (surface_charge.h, BuildSettings::surface_tolerance).
+  /// Returns false when the solid has none (its field is then its cells' alone).
+  virtual bool surface(double tolerance, std::vector<Vec3>& vertices, std::vector<Eigen::Vector3i>& triangles) const {
+    (void)tolerance;
+    (void)vertices;
+    (void)triangles;
     return false;
   }
   /// Demagnetizing tensor D at p inside the region (own frame): when the whole region is

@@ -117,7 +117,12 @@ std::vector<Vec3> field_at_points(const Model& m, const Settings& st, const Stat
   if (m.empty() || points.empty()) return out;
   const Targets t = Targets::from_points(points);
   std::vector<Vec3> B(points.size());
-  const std::int64_t work = field_at_targets(m, s, s.total, t, FieldOptions{st.theta, st.near_field}, B);
+  // The same field as the field volumes: exact surfaces of permanent parts, and inside a cell's
+  // cuboid its smeared moment (bounded inside material, where a point dipole is singular).
+  FieldOptions opt{st.theta, st.near_field};
+  opt.smear_inside = true;
+  opt.surfaces = true;
+  const std::int64_t work = field_at_targets(m, s, s.total, t, opt, B);
   if (stats) stats->field_pairs += work;
   for (std::size_t q = 0; q < B.size(); ++q) out[t.original[q]] += B[q];
   return out;

@@ -99,6 +99,9 @@ struct MagneticsSettings {
   Vec3 external_field = Vec3::Zero();  ///< T
   double near_field = 2.5;           ///< cell sizes (exact cuboid interactions within)
   int near_field_order = 4;
+  /// Preset: curved permanent magnets keep their surface, tessellated within this distance (m),
+  /// for the exact field near them (physics.md §12).
+  double surface_tolerance = 1e-5;
 };
 
 struct FieldOutput {

@@ -9,9 +9,11 @@ bool apply_quality_preset(const std::string& quality, MagneticsSettings& mg) {
     double theta, near_field;
     int near_field_order;
     double induction_tolerance;
+    double surface_tolerance;
   };
-  static constexpr Preset kPresets[] = {
-      {"draft", 2, 0.7, 1.5, 3, 1e-3}, {"default", 4, 0.5, 2.5, 4, 1e-4}, {"high", 8, 0.3, 4.0, 6, 1e-6}};
+  static constexpr Preset kPresets[] = {{"draft", 2, 0.7, 1.5, 3, 1e-3, 5e-5},
+                                        {"default", 4, 0.5, 2.5, 4, 1e-4, 1e-5},
+                                        {"high", 8, 0.3, 4.0, 6, 1e-6, 2e-6}};
   for (const Preset& p : kPresets) {
     if (quality != p.name) continue;
     mg.quality = quality;
@@ -20,6 +22,7 @@ bool apply_quality_preset(const std::string& quality, MagneticsSettings& mg) {
     mg.near_field = p.near_field;
     mg.near_field_order = p.near_field_order;
     mg.induction_tolerance = p.induction_tolerance;
+    mg.surface_tolerance = p.surface_tolerance;
     return true;
   }
   return false;
@@ -71,6 +74,7 @@ magnetics::Model build_magnetics_model(const Scene& sc) {
   }
   magnetics::BuildSettings bs;
   bs.cell_size = sc.magnetics.cell_size.value_or(0.001);
+  bs.surface_tolerance = sc.magnetics.surface_tolerance;
   return magnetics::build_model(bodies, bs);
 }
 

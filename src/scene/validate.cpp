@@ -460,6 +460,16 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       mg.induction_tolerance = s.induction_tolerance.v;
     }
   }
+  if (s.surface_tolerance.set) {
+    // 0 turns surfaces off; otherwise a length from 0.1 um to 1 mm (coarser is no surface at all).
+    if (s.surface_tolerance.v == 0) {
+      mg.surface_tolerance = 0;
+    } else if (!(s.surface_tolerance.v * c.L >= 1e-7 && s.surface_tolerance.v * c.L <= 1e-3)) {
+      d.add(s.surface_tolerance.loc, "magnetics.surface_tolerance", "must be 0 (off) or from 1e-7 to 1e-3 m");
+    } else {
+      mg.surface_tolerance = s.surface_tolerance.v * c.L;
+    }
+  }
   if (s.external_field.set && within(c, s.external_field, "magnetics.external_field", kMaxFieldTesla, 1, "T")) {
     mg.external_field = vec3(s.external_field);
   }

@@ -73,9 +73,16 @@ TEST_F(Bake, SameCacheOnEmulatedIntelAndAmdCpus) {
   struct Case {
     std::string scene, cache, frames;
   };
+  // TST without its previews: the cache is what is compared, and field lines under emulation
+  // cost minutes.
+  std::ifstream tst_in(src("scenes/paper/tst.yaml"));
+  std::string tst((std::istreambuf_iterator<char>(tst_in)), std::istreambuf_iterator<char>());
+  ASSERT_NE(tst.find("\noutputs:"), std::string::npos);
+  tst = tst.substr(0, tst.find("\noutputs:")) + "\noutputs:\n  cache: tst.h5\n";
+  std::ofstream(dir / "tst.yaml") << tst;
   const Case cases[] = {{src("tests/golden/magnets_in_space.yaml"), "magnets_in_space.h5", ""},
                         {src("tests/golden/sphere_pickup.yaml"), "sphere_pickup.h5", ""},
-                        {src("scenes/paper/tst.yaml"), "tst.h5", " --frames 1-2"}};
+                        {(dir / "tst.yaml").string(), "tst.h5", " --frames 1-2"}};
   for (const Case& c : cases) {
     ASSERT_EQ(sh(exe() + " -q bake " + c.scene + c.frames + " -o " + (dir / "host").string()).code, 0) << c.scene;
     for (const char* cpu : {"Haswell", "EPYC-Rome"}) {

@@ -168,6 +168,8 @@ TEST_F(Hostile, NumbersThatOverflowAreErrorsAtTheirKey) {
       {"position: [0, 0, 4]", "position: [0, 0, 1e300]", "position"},
       {"gravity: [0, 0, -9810]", "gravity: [0, 0, -1e300]", "gravity"},
       {"quality: draft,", "quality: draft, cell_size: 1e-12,", "magnetics.cell_size"},
+      {"quality: draft,", "quality: draft, surface_tolerance: 1e-12,", "magnetics.surface_tolerance"},
+      {"quality: draft,", "quality: draft, surface_tolerance: -1,", "magnetics.surface_tolerance"},
   };
   for (const Case& c : cases) {
     const fs::path s = scene("n.yaml", with(kScene, c.from, c.to));
@@ -443,6 +445,8 @@ TEST_F(Hostile, CachesWithIndicesOutOfRangeOrBadFramesAreRefused) {
       {"magnetics/parts/orientation", 0, 0},     {"frames/step", 2, 1},
       {"frames/step", 1, 1},                     {"bodies/center_of_mass", 0, nan},
       {"bake/status", 0, 99},                    {"magnetics/cells/ball", 1, 7},
+      {"magnetics/parts/surface_begin", 1, 1e9}, {"magnetics/parts/surface_begin", 0, 3},
+      {"magnetics/parts/surface_vertex", 4, nan},
   };
   for (const Case& c : cases) {
     damage(good, bad, [&](hid_t f) {
