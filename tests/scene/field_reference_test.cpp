@@ -32,7 +32,9 @@ struct CaseErrors {
   int triangles = 0;
 };
 
-CaseErrors errors_of(const nlohmann::json& c, const std::string& quality) {
+// `one_by_one`: each point alone (a target group of radius 0, as a probe of one point or a field
+// line step sees it); otherwise all points in one call (groups of up to 32 spread over the case).
+CaseErrors errors_of(const nlohmann::json& c, const std::string& quality, bool one_by_one = false) {
   std::string text = replace_all(c["scene"].get<std::string>(), "QUALITY", quality);
   text = replace_all(text, "MESH", source_dir() + "/scenes/meshes/horseshoe.obj");
   const scene::Scene sc = scene::load_scene_text(text, source_dir() + "/tests/data/ref.yaml");
@@ -45,7 +47,10 @@ CaseErrors errors_of(const nlohmann::json& c, const std::string& quality) {
   magnetics::evaluate(m, settings, st, r);
   std::vector<Vec3> pts;
   for (const auto& p : c["points"]) pts.emplace_back(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
-  const std::vector<Vec3> B = magnetics::field_at_points(m, settings, st, pts);
+  std::vector<Vec3> B = magnetics::field_at_points(m, settings, st, pts);
+  if (one_by_one) {
+    for (std::size_t q = 0; q < pts.size(); ++q) B[q] = magnetics::field_at_points(m, settings, st, {&pts[q], 1})[0];
+  }
   CaseErrors e;
   e.triangles = static_cast<int>(m.surface_sigma.size());
   for (std::size_t q = 0; q < pts.size(); ++q) {
@@ -65,8 +70,10 @@ nlohmann::json reference() {
 }
 
 TEST(FieldReference, CurvedAndMeshMagnetsAreExactToTheirSurfaceAndInside) {
-  // Claimed (physics.md §12): within 1% from 0.5 mm off the surface outward and inside at
-  // default, 0.1% at high, 3% at draft.
+  // All of a case's points in one call: the target groups span the case, every group opens the
+  // magnet, so this measures the surface field itself at every distance (a lone far point takes
+  // the tree's dipoles instead: the next test). Claimed (physics.md §12): within 1% at default,
+  // 0.1% at high, 3% at draft.
   const std::map<std::string, double> claim = {{"draft", 0.03}, {"default", 0.01}, {"high", 0.001}};
   const nlohmann::json ref = reference();
   ASSERT_EQ(ref["cases"].size(), 5u);
@@ -82,6 +89,31 @@ TEST(FieldReference, CurvedAndMeshMagnetsAreExactToTheirSurfaceAndInside) {
       }
       std::printf("%-16s %-8s %5d triangles  %s\n", c["name"].get<std::string>().c_str(), quality.c_str(), e.triangles,
                   line.c_str());
+    }
+  }
+}
+
+TEST(FieldReference, SinglePointsBeyondTheSurfaceRegionCarryTheTreesDipoleError) {
+  // A point alone opens a part only within (r_p / theta) of its centre; beyond, the part's cells
+  // (and farther the whole body) act as aggregated dipoles, whose error for a non-cubic magnet is
+  // of order (r/d)^2 of its octupole-order shape term (physics.md §12, "Far from the surface").
+  // Asserted: up to 2 mm off the surface (and inside) the claims above; farther, the measured
+  // limit with a margin (worst measured: the horseshoe 35% at 20 mm at draft, 1.5% at 20 cm at
+  // every preset, as one dipole; the cylinders 1.6-1.8% at 20 mm at default, 0.3-0.4% at high).
+  const std::map<std::string, std::pair<double, double>> claim = {
+      {"draft", {0.03, 0.5}}, {"default", {0.01, 0.03}}, {"high", {0.001, 0.03}}};
+  const nlohmann::json ref = reference();
+  for (const auto& c : ref["cases"]) {
+    for (const auto& [quality, tol] : claim) {
+      const CaseErrors e = errors_of(c, quality, true);
+      std::string line;
+      for (const auto& [d, w] : e.worst) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%s: %.1e  ", d < 0 ? "inside" : (std::to_string(d * 1e3).substr(0, 5) + " mm").c_str(), w);
+        line += buf;
+        EXPECT_LT(w, d <= 0.002 ? tol.first : tol.second) << c["name"] << " at " << quality << ", distance " << d << " m";
+      }
+      std::printf("one by one: %-16s %-8s %s\n", c["name"].get<std::string>().c_str(), quality.c_str(), line.c_str());
     }
   }
 }
