@@ -126,14 +126,6 @@ bool CylinderShape::surface(double tolerance, std::vector<Vec3>& vertices,
   return true;
 }
 
-bool TorusShape::surface(double tolerance, std::vector<Vec3>& vertices, std::vector<Eigen::Vector3i>& triangles) const {
-  // Around the axis the outer equator (radius R + r) sets the segments; around the tube, r.
-  const int n = std::max(circle_segments(R_ + r_, tolerance), 2 * circle_segments(r_, tolerance));
-  const std::shared_ptr<const MeshShape> mesh = triangulate(n);
-  vertices = mesh->vertices();
-  triangles = mesh->triangles();
-  return true;
-}
 
 bool CylinderShape::demag_tensor(const Vec3& p, Mat3& D) const {
   std::call_once(once_, [&] { tessellation_ = triangulate(512); });

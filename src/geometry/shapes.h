@@ -107,7 +107,6 @@ class TorusShape final : public Shape {
   bool contains(const Vec3& p) const override;
   bool demag_tensor(const Vec3& p, Mat3& D) const override;
   ShapeKind kind() const override { return ShapeKind::kTorus; }
-  bool surface(double tolerance, std::vector<Vec3>& vertices, std::vector<Eigen::Vector3i>& triangles) const override;
   MassProperties mass_properties() const override;
   double major() const { return R_; }
   double minor() const { return r_; }

@@ -1,8 +1,8 @@
 // Exact fields of uniformly magnetized polyhedra from their surface charge (physics.md §12):
 // a magnetization M that is uniform inside a closed surface is the same source as a charge
 // density sigma = M . n on that surface, and a flat triangle of constant charge has a closed-form
-// field. A permanent part whose surface is a triangle mesh (a box, a mesh magnet, or a cylinder or
-// torus tessellated within a tolerance) thus gets a field that is exact up to the tessellation,
+// field. A permanent part whose surface is a triangle mesh (a mesh magnet, or a cylinder
+// tessellated within a tolerance) thus gets a field that is exact up to the tessellation,
 // right down to its surface and inside it, where its cells' point dipoles are far off.
 #pragma once
 

@@ -108,8 +108,12 @@ TEST(BodyTree, ForcesOfManyBodiesMatchEveryCellPair) {
               "%.2e (worst %.2e; every body pair: %.2e); aggregate interactions %lld (every body pair: %lld)\n",
               vs_pairs, worst_groups, vs_exact, worst_exact, rms_error(all, ref), (long long)r.stats.node_pairs,
               (long long)all.stats.node_pairs);
-  EXPECT_LT(vs_pairs, 0.01);
-  EXPECT_LT(vs_exact, 0.01);
+  // architecture.md: 0.27% and 0.38% rms (measured 2.70e-3 and 3.79e-3, 2026-12-03); worst bodies
+  // 2.37e-2 and 6.06e-2.
+  EXPECT_LT(vs_pairs, 5e-3);
+  EXPECT_LT(vs_exact, 6e-3);
+  EXPECT_LT(worst_groups, 0.04);
+  EXPECT_LT(worst_exact, 0.09);
   EXPECT_LT(r.stats.node_pairs, all.stats.node_pairs);
   const Sums sm = sums(s, r);
   EXPECT_LT(sm.force.norm(), 1e-12 * sm.fmax * s.model.body_count);
@@ -130,7 +134,6 @@ TEST(DualFieldWalk, MatchesEveryCellAndIsLinearInTheMoments) {
   const Targets& t = s.state.induced_targets;
   ASSERT_GT(t.position.size(), 10000u);
   std::vector<Vec3> B(t.position.size()), B0(t.position.size());
-  EvalStats ref_stats;
   const std::int64_t work = field_at_targets(s.model, s.state, s.state.total, t, FieldOptions{0.5, 0.0}, B);
   const std::int64_t work0 = field_at_targets(s.model, s.state, s.state.total, t, FieldOptions{0.0, 0.0}, B0);
   double num = 0, den = 0;

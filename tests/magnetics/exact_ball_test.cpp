@@ -98,6 +98,8 @@ TEST(ExactBall, TouchingBallsFeelTheExactDipolePair) {
     }
   }
   std::printf("lattice of 1 mm cells, touching or 0.5 mm apart: worst force error %.1f%%\n", 100 * worst_lattice);
+  // The reason balls are one exact cell (README: the lattice was up to 9% off; measured 9.1%).
+  EXPECT_GT(worst_lattice, 0.03);
 }
 
 // A steel cube (lattice cells, induced) under a ball magnet: the ball's field at every steel cell

@@ -68,10 +68,6 @@ std::string Preview::setup_error;
 
 bool near_background(const Eigen::Vector3i& c) {
   const render::Vec3f bg = render::Renderer::background();
-  for (int k = 0; k < 3; ++k) {
-    const int ref = int(std::lround(255 * std::pow(bg[k], 1.0 / 2.2)));  // the shader's gamma
-    (void)ref;
-  }
   // Clear colour is written as is (no gamma on glClear).
   return std::abs(c[0] - int(bg[0] * 255 + 0.5)) <= 2 && std::abs(c[1] - int(bg[1] * 255 + 0.5)) <= 2 &&
          std::abs(c[2] - int(bg[2] * 255 + 0.5)) <= 2;

@@ -73,12 +73,21 @@ TEST(FieldReference, CurvedAndMeshMagnetsAreExactToTheirSurfaceAndInside) {
   // All of a case's points in one call: the target groups span the case, every group opens the
   // magnet, so this measures the surface field itself at every distance (a lone far point takes
   // the tree's dipoles instead: the next test). Claimed (physics.md §12): within 1% at default,
-  // 0.1% at high, 3% at draft.
+  // 0.1% at high, 3% at draft; asserted per case at about twice the error measured when this
+  // was written (README and physics.md quote those), each within the claim.
   const std::map<std::string, double> claim = {{"draft", 0.03}, {"default", 0.01}, {"high", 0.001}};
+  const std::map<std::string, std::map<std::string, double>> bound = {
+      {"cube", {{"draft", 0.02}, {"default", 1e-3}, {"high", 1e-4}}},
+      {"cylinder_tilted", {{"draft", 0.02}, {"default", 1e-3}, {"high", 2e-6}}},
+      {"cylinder_axial", {{"draft", 1e-4}, {"default", 3e-6}, {"high", 1e-7}}},
+      {"sphere", {{"draft", 2e-6}, {"default", 2e-6}, {"high", 2e-6}}},
+      {"horseshoe", {{"draft", 2e-6}, {"default", 2e-6}, {"high", 2e-6}}}};
   const nlohmann::json ref = reference();
   ASSERT_EQ(ref["cases"].size(), 5u);
   for (const auto& c : ref["cases"]) {
-    for (const auto& [quality, tol] : claim) {
+    for (const auto& [quality, claimed] : claim) {
+      const double tol = bound.at(c["name"].get<std::string>()).at(quality);
+      ASSERT_LE(tol, claimed);
       const CaseErrors e = errors_of(c, quality);
       std::string line;
       for (const auto& [d, w] : e.worst) {

@@ -265,8 +265,8 @@ TEST(Contact, OnlyTheIslandThatNeedsPiecesIsRefined) {
   EXPECT_EQ(body_steps_all, body_steps_magnets + 6LL * nominal);    // the blocks were not
   EXPECT_EQ(body_steps_blocks, 6LL * nominal);
   EXPECT_LT(body_steps_magnets, 3 * steps_magnets);  // nor was the lone magnet (3 bodies)
-  EXPECT_LT(pair_diff, 1e-9);
-  EXPECT_LT(block_diff, 1e-12);
+  EXPECT_EQ(pair_diff, 0.0);  // bit-identical to the lone runs (README, physics.md §8 item 9)
+  EXPECT_EQ(block_diff, 0.0);
 }
 
 // The health summary names an energy rise without a source and a body that left the region.
