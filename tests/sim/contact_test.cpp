@@ -178,9 +178,11 @@ TEST(Contact, SpinningSnappedDumbbellKeepsItsAngularMomentum) {
   std::printf("dumbbell: angular momentum %.6e -> %.6e kg m^2/s in 0.25 s (%.3f%% per second), spins off the "
               "pair's by up to %.3f rad/s, centres off 10 mm by up to %.2e mm\n",
               l0.norm(), l1.norm(), 100 * loss / 0.25, worst_spin, 1e3 * worst_gap);
-  EXPECT_LT(std::abs(loss), 0.05 * 0.25);    // under 5% per second
-  EXPECT_LT(worst_spin, 0.1);                 // each cube turns with the pair (1% of 10 rad/s)
-  EXPECT_LT(worst_gap, 5e-5);                 // and they stay snapped
+  // The issue asked for under 5% per second; README states 1e-6 over 0.25 s (measured: no
+  // change in 7 digits, spins within 1e-3 rad/s, centres within 1e-8 m).
+  EXPECT_LT(std::abs(loss), 1e-5);
+  EXPECT_LT(worst_spin, 1e-2);                // each cube turns with the pair
+  EXPECT_LT(worst_gap, 1e-6);                 // and they stay snapped
 }
 
 // A steel ball (radius 5 mm, chi 700) resting on top of a cylinder magnet, dt 1 ms: the pull that
