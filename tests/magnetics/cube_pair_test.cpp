@@ -35,7 +35,10 @@ TEST(CubePair, DefaultSettingsWithinOnePercentFromFiveMillimetres) {
   Settings st;
   for (double gap : {0.020, 0.010, 0.005}) {
     const double f = cube_pair_force(gap, 0.0025, st), e = exact(gap);
-    EXPECT_NEAR(f, e, 0.01 * std::abs(e)) << "gap " << gap;
+    std::printf("default, gap %g m: %.2e\n", gap, std::abs(f / e - 1));
+    // Measured 2026-12-03: 0.62% at 20 mm (theta's aggregate error, physics.md §5), 0.097% at
+    // 10 mm, 0.073% at 5 mm (README: 0.06%).
+    EXPECT_NEAR(f, e, (gap > 0.015 ? 0.01 : 2e-3) * std::abs(e)) << "gap " << gap;
   }
 }
 
@@ -47,7 +50,9 @@ TEST(CubePair, HighSettingsWithinOnePercentDownToContact) {
   st.near_field_order = 6;
   for (double gap : {0.020, 0.005, 0.002, 0.001, 0.0005, 0.0}) {
     const double f = cube_pair_force(gap, 0.00125, st), e = exact(gap);
-    EXPECT_NEAR(f, e, 0.01 * std::abs(e)) << "gap " << gap;
+    std::printf("high, gap %g m: %.2e\n", gap, std::abs(f / e - 1));
+    // Measured 2026-12-03: at most 0.19% (1 mm gap), 0.11% at contact.
+    EXPECT_NEAR(f, e, 3e-3 * std::abs(e)) << "gap " << gap;
   }
 }
 
