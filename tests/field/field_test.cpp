@@ -77,7 +77,7 @@ TEST_F(Field, VolumesHaveTheConventionsRenderersExpect) {
 
 // Volume values against `magbake probe` at voxel centres outside the bodies (frame 1 is the
 // scene's initial state, which probe evaluates at --time 0). The scene asks for theta 0: probe
-// sums every cell directly, field export uses its tree (theta 0.3) and single precision, so
+// sums every cell directly, field export uses its tree (--theta default 0.25) and single precision, so
 // the difference is field export's error (documented bound: 1e-3 RMS relative).
 TEST_F(Field, VoxelValuesMatchProbe) {
   std::ifstream in(src("tests/golden/sphere_pickup.yaml"));
