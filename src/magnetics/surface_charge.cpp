@@ -139,8 +139,11 @@ Vec3 SurfaceMesh::b_field(const Vec3& x, std::vector<double>& d) const {
     const int a = edge[e][0], b = edge[e][1];
     const Vec3& t = edge_tangent[e];
     const double s1 = (point[a] - x).dot(t), s2 = (point[b] - x).dot(t);
-    const double L = s1 > 0 ? std::log((d[b] + s2) / (d[a] + s1)) : std::log((d[a] - s1) / (d[b] - s2));
-    H += L * edge_weight[e];
+    const double num = s1 > 0 ? d[b] + s2 : d[a] - s1, den = s1 > 0 ? d[a] + s1 : d[b] - s2;
+    // On the edge itself the field is logarithmically infinite: that edge is left out there
+    // (a voxel or probe exactly on a facet edge gets a finite value, not NaN).
+    if (!(num > 0 && den > 0)) continue;
+    H += std::log(num / den) * edge_weight[e];
   }
   double angle = 0;
   for (std::size_t g = 0; g + 1 < group_begin.size(); ++g) {

@@ -109,6 +109,10 @@ TEST(SurfaceCharge, ThePreparedMeshIsTheTriangleSoupToRounding) {
     const Vec3 ref = surface_b_field(v.data(), sigma.data(), ntri, M, x);
     EXPECT_LT((mesh.b_field(x, scratch) - ref).norm(), 1e-12 * ref.norm() + 1e-15) << x.transpose();
   }
+  // On an edge and on a corner (a voxel grid aligned with a mesh's vertices): finite.
+  for (const Vec3& x : {Vec3(0.5 * (v[0] + v[1])), v[0], Vec3(0.5 * (prism[0] + prism[1]))}) {
+    EXPECT_TRUE(mesh.b_field(x, scratch).allFinite()) << x.transpose();
+  }
   // An open surface is refused.
   SurfaceMesh open;
   EXPECT_FALSE(open.build(v.data(), sigma.data(), ntri - 1, M));
