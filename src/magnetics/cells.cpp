@@ -227,7 +227,7 @@ void set_surfaces(Model& m, const PartTable& parts) {
   assert(static_cast<int>(parts.surface_begin.size()) == np + 1);
   m.part_surface_begin = parts.surface_begin;
   m.surface_vertex = parts.surface_vertex;
-  m.surface_sigma.assign(parts.surface_begin.back(), 0.0);
+  std::vector<double> sigma(parts.surface_begin.back());
   m.part_surface_center.assign(np, Vec3::Zero());
   m.part_surface_radius.assign(np, 0.0);
   m.part_surface_mesh.assign(np, SurfaceMesh{});
@@ -237,7 +237,7 @@ void set_surfaces(Model& m, const PartTable& parts) {
     Box3 bb;
     for (int t = t0; t < t1; ++t) {
       const Vec3 &a = m.surface_vertex[3 * t], &b = m.surface_vertex[3 * t + 1], &c = m.surface_vertex[3 * t + 2];
-      m.surface_sigma[t] = parts.magnetization[p].dot((b - a).cross(c - a).normalized());
+      sigma[t] = parts.magnetization[p].dot((b - a).cross(c - a).normalized());
       bb.extend(a), bb.extend(b), bb.extend(c);
     }
     const Vec3 c = bb.center();
@@ -245,7 +245,7 @@ void set_surfaces(Model& m, const PartTable& parts) {
     for (int k = 3 * t0; k < 3 * t1; ++k) r = std::max(r, (m.surface_vertex[k] - c).norm());
     m.part_surface_center[p] = c;
     m.part_surface_radius[p] = r;
-    if (!m.part_surface_mesh[p].build(&m.surface_vertex[3 * t0], &m.surface_sigma[t0], t1 - t0, parts.magnetization[p])) {
+    if (!m.part_surface_mesh[p].build(&m.surface_vertex[3 * t0], &sigma[t0], t1 - t0, parts.magnetization[p])) {
       throw std::runtime_error("magnetics: the surface of part " + std::to_string(p) + " is not closed");
     }
   }

@@ -99,15 +99,16 @@ struct Model {
   std::vector<PartReport> part_report;
   // Exact surfaces of permanent parts (BuildSettings::surface_tolerance): triangles of part p are
   // [part_surface_begin[p], part_surface_begin[p+1]); triangle t has corners surface_vertex[3t..3t+2]
-  // (body frame, m, counter-clockwise seen from outside) and charge density surface_sigma[t] =
-  // M . n (A/m). A part with no triangles has no surface. Empty vectors: no part has one.
+  // (body frame, m, counter-clockwise seen from outside); its charge density M . n lives in
+  // part_surface_mesh. A part with no triangles has no surface. Empty vectors: no part has one.
   std::vector<int> part_surface_begin;   ///< (npart + 1)
   std::vector<Vec3> surface_vertex;      ///< (3 ntri x 3) body frame, m
-  std::vector<double> surface_sigma;     ///< (ntri) A/m
   std::vector<Vec3> part_surface_center; ///< (npart x 3) centre of a sphere around the surface, body frame, m
   std::vector<double> part_surface_radius;  ///< (npart) its radius, m (0 without a surface)
   std::vector<SurfaceMesh> part_surface_mesh;  ///< (npart) the same triangles prepared for evaluation
-  bool has_surfaces() const { return !surface_sigma.empty(); }
+  bool has_surfaces() const { return !surface_vertex.empty(); }
+  /// Triangles of all surfaces.
+  int surface_triangle_count() const { return static_cast<int>(surface_vertex.size() / 3); }
   int surface_triangles(int p) const { return has_surfaces() ? part_surface_begin[p + 1] - part_surface_begin[p] : 0; }
 
   // ---- cells (ncell), ordered so every node's cells are contiguous

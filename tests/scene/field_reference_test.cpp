@@ -52,7 +52,7 @@ CaseErrors errors_of(const nlohmann::json& c, const std::string& quality, bool o
     for (std::size_t q = 0; q < pts.size(); ++q) B[q] = magnetics::field_at_points(m, settings, st, {&pts[q], 1})[0];
   }
   CaseErrors e;
-  e.triangles = static_cast<int>(m.surface_sigma.size());
+  e.triangles = m.surface_triangle_count();
   for (std::size_t q = 0; q < pts.size(); ++q) {
     const auto& b = c["B"][q];
     const Vec3 ref(b[0].get<double>(), b[1].get<double>(), b[2].get<double>());
@@ -138,8 +138,8 @@ TEST(FieldReference, WithoutSurfacesTheCellsAreFarOffNearCurvedMagnets) {
   scene::Scene cells_only = sc;
   cells_only.magnetics.surface_tolerance = 0;
   const magnetics::Model with = scene::build_magnetics_model(sc), without = scene::build_magnetics_model(cells_only);
-  EXPECT_GT(with.surface_sigma.size(), 100u);
-  EXPECT_TRUE(without.surface_sigma.empty());
+  EXPECT_GT(with.surface_triangle_count(), 100);
+  EXPECT_EQ(without.surface_triangle_count(), 0);
   magnetics::State st;
   st.resize(without);
   scene::set_poses_at(sc, 0.0, st);
