@@ -1,6 +1,7 @@
 #include "forces.h"
 
 #include <cassert>
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -9,29 +10,153 @@
 #include "cuboid.h"
 #include "dipole.h"
 #include "parallel.h"
+#include "surface_charge.h"
 
 namespace magbake::magnetics {
 namespace {
 
-enum : unsigned char { kFar = 0, kBlock = 1, kBlockClamp = 2, kBlockNear = 4 };
+enum : unsigned char {
+  kFar = 0,
+  kBlock = 1,
+  kBlockClamp = 2,
+  kBlockNear = 4,
+  kBlockMixed = 8,   // a side's filter splits a leaf (cells of several parts): cell by cell
+  kSurfaceOnA = 16,  // a surface part of body b (index a) on the cells of leaf b of body a
+  kSurfaceOnB = 32,  // a surface part of body a on the cells of leaf b of body b
+};
 
 struct Interaction {
   int pair;            // index into the body-pair list
-  int a, b;            // nodes of the pair's first and second body
-  unsigned char kind;  // kFar or kBlock (| kBlockClamp | kBlockNear)
+  int a, b;            // nodes of the pair's first and second body; surfaces: part, target leaf
+  unsigned char kind;  // kFar, kBlock (| kBlockClamp | kBlockNear | kBlockMixed) or kSurfaceOn*
+  int walk = 0;        // blocks: the walk (and so the filters) it came from
 };
 
 struct PairResult {
   Vec3 force = Vec3::Zero();   // on body a
   Vec3 torque = Vec3::Zero();  // on body a about its origin
   double energy = 0.0;
+  double permanent_energy = 0.0;  // surfaces: the permanent moments' share (-m_perm . B)
   int near_pairs = 0;
+  std::int64_t surface_pairs = 0;
 };
+
+// Which cells of one side a walk takes: all, all but those of some parts, or one part's only.
+struct Filter {
+  int only = -1;             // >= 0: this part's cells only
+  const int* ex = nullptr;   // otherwise: all but these parts' cells
+  int nex = 0;
+  bool all() const { return only < 0 && nex == 0; }
+  bool allows(int part) const { return only >= 0 ? part == only : std::find(ex, ex + nex, part) == ex + nex; }
+  // 1: every cell below node n passes, 0: none, -1: some (the node must be opened).
+  int node(const Model& m, int n) const {
+    if (all()) return 1;
+    return m.node_part[n] >= 0 ? allows(m.node_part[n]) : -1;
+  }
+};
+
+// Surface parts (Model::part_surface_mesh) that a body pair takes by their exact field: those
+// of body a that body b's root node would open (as a field target group would, field.cpp), and
+// likewise of body b. Each opened surface acts on the other body's leaves that would open it;
+// the other body's farther subtrees meet the part's cells in a walk of their own. A pair of
+// parts is computed once: a surface p of a on b's near leaves, every part of b included; a
+// surface q of b on a's near leaves, a's opened surfaces excluded; cells with cells for the rest.
+constexpr int kMaxPairSurfaces = 16;
+struct PairSurfaces {
+  int na = 0, nb = 0;
+  int a[kMaxPairSurfaces], b[kMaxPairSurfaces];
+  // Per opened surface (a's first, then b's): 1 for each cell of the other body in a leaf
+  // that takes the surface (index: cell - first cell of that body).
+  std::vector<std::vector<std::uint8_t>> near_cell;
+  bool any() const { return na + nb > 0; }
+  bool in_a(int part) const { return std::find(a, a + na, part) != a + na; }
+};
+
+// A dual walk of one body pair from (na, nb) with a filter per side.
+struct Walk {
+  int pair, na, nb;
+  Filter fa, fb;
+};
+
+// Parts with a surface, by body (empty when the model has none).
+struct SurfaceParts {
+  std::vector<int> begin, part;
+  explicit SurfaceParts(const Model& m) {
+    if (!m.has_surfaces()) return;
+    begin.assign(m.body_count + 1, 0);
+    for (int p = 0; p < static_cast<int>(m.part_body.size()); ++p) {
+      if (m.surface_triangles(p) > 0) ++begin[m.part_body[p] + 1];
+    }
+    for (int b = 0; b < m.body_count; ++b) begin[b + 1] += begin[b];
+    part.resize(begin[m.body_count]);
+    std::vector<int> fill(begin.begin(), begin.end() - 1);
+    for (int p = 0; p < static_cast<int>(m.part_body.size()); ++p) {
+      if (m.surface_triangles(p) > 0) part[fill[m.part_body[p]]++] = p;
+    }
+  }
+  bool empty() const { return part.empty(); }
+};
+
+// Whether node n of body y would open surface part p of body x: the theta test on the part's
+// bounding sphere and the node's, as field.cpp's target groups.
+bool opens(const Model& m, const Settings& st, const State& s, int p, int x, int y, int n) {
+  const Vec3 cp = s.body_pose[x].position + s.body_rotation[x] * m.part_surface_center[p];
+  const double d = (cp - s.body_pose[y].position - s.node_offset[n]).norm();
+  return !(m.part_surface_radius[p] + m.node_radius[n] < st.theta * d);
+}
+
+// The surfaces of body x opened by body y's root node.
+int opened_surfaces(const Model& m, const Settings& st, const State& s, const SurfaceParts& sp, int x, int y,
+                    int* out) {
+  int n = 0;
+  if (sp.empty()) return 0;
+  for (int i = sp.begin[x]; i < sp.begin[x + 1] && n < kMaxPairSurfaces; ++i) {
+    if (opens(m, st, s, sp.part[i], x, y, m.body_root[y])) out[n++] = sp.part[i];
+  }
+  return n;
+}
+
+// Exact surface field of part `sp` (body bs) on the cells [c0, c1) of body bt that `targets`
+// allows: each cell's total moment m feels F = G^T m and the torque m x B (G = grad B of the
+// surface at the cell), energy -m . B. Sums on the target body, torque about its origin;
+// permanent_energy gets -m_perm . B. Returns the cell-triangle evaluations.
+std::int64_t surface_on_cells(const Model& m, const State& s, int sp, int bt, int c0, int c1, const Filter& targets,
+                              PairResult& out) {
+  const int bs = m.part_body[sp];
+  const Mat3& Rs = s.body_rotation[bs];
+  const Vec3 rel = s.body_pose[bt].position - s.body_pose[bs].position;
+  const SurfaceMesh& mesh = m.part_surface_mesh[sp];
+  std::vector<double> scratch;
+  std::int64_t count = 0;
+  for (int c = c0; c < c1; ++c) {
+    const Vec3 mc = s.total.cell[c];
+    if (mc.squaredNorm() == 0.0 || !targets.allows(m.cell_part[c])) continue;
+    const Vec3 xb = Rs.transpose() * (rel + s.cell_offset[c]);
+    Vec3 B;
+    Mat3 G;
+    mesh.b_field_gradient(xb, scratch, B, G);
+    const Vec3 mb = Rs.transpose() * mc;
+    const Vec3 F = Rs * (G.transpose() * mb);
+    const Vec3 Bw = Rs * B;
+    out.force += F;
+    out.torque += s.cell_offset[c].cross(F) + mc.cross(Bw);
+    out.energy -= mc.dot(Bw);
+    out.permanent_energy -= s.permanent.cell[c].dot(Bw);
+    count += m.surface_triangles(sp);
+  }
+  return count;
+}
+
+// The dipole pairs of a leaf block whose cells some filter splits, with the cuboid correction
+// of its near full cells as near_correction().
+void mixed_block(const Model& m, const Settings& st, const State& s, int ta, int tb, int sa, int sb,
+                 const Vec3& delta, const Filter& fa, const Filter& fb, bool near, PairResult& out);
 
 // Exact-cuboid correction for the near cell pairs of a leaf block: adds (cuboid - dipole).
 // Only full cells are cuboids; a boundary cell stays a dipole at the centroid of its material.
+// Cells that the filters leave out are skipped.
 int near_correction(const Model& m, const Settings& st, const State& s, int ta, int tb, int sa, int sb,
-                    const Vec3& delta, PairResult& out) {
+                    const Vec3& delta, PairResult& out, const Filter& fa = {}, const Filter& fb = {}) {
   int count = 0;
   if (ta >= tb || sa >= sb) return 0;
   const Mat3& Ra = s.body_rotation[m.cell_body[ta]];
@@ -39,6 +164,7 @@ int near_correction(const Model& m, const Settings& st, const State& s, int ta, 
   for (int k = ta; k < tb; ++k) {
     const Vec3 mk = s.total.cell[k];
     if (!m.cell_full[k] || mk.squaredNorm() == 0.0) continue;
+    if (!fa.allows(m.cell_part[k])) continue;
     const double hk = m.cell_half[k].maxCoeff();
     const Vec3 ck = Ra * m.cell_center[k];  // cuboid centre relative to body a's origin
     for (int i = sa; i < sb; ++i) {
@@ -47,6 +173,7 @@ int near_correction(const Model& m, const Settings& st, const State& s, int ta, 
       if (rc.squaredNorm() >= lim * lim) continue;
       const Vec3 mi = s.total.cell[i];
       if (!m.cell_full[i] || mi.squaredNorm() == 0.0) continue;
+      if (!fb.allows(m.cell_part[i])) continue;
       Cuboid cub_k{rc, s.part_rotation[m.cell_part[k]], m.cell_half[k], mk / (8.0 * m.cell_half[k].prod())};
       Cuboid cub_i{Vec3::Zero(), s.part_rotation[m.cell_part[i]], m.cell_half[i], mi / (8.0 * m.cell_half[i].prod())};
       // Quadrature order by distance: the full order at contact, 3 from 2.5 cell sizes on (the
@@ -76,15 +203,45 @@ int near_correction(const Model& m, const Settings& st, const State& s, int ta, 
   return count;
 }
 
+void mixed_block(const Model& m, const Settings& st, const State& s, int ta, int tb, int sa, int sb,
+                 const Vec3& delta, const Filter& fa, const Filter& fb, bool near, PairResult& out) {
+  for (int k = ta; k < tb; ++k) {
+    const Vec3 mk = s.total.cell[k];
+    if (mk.squaredNorm() == 0.0 || !fa.allows(m.cell_part[k])) continue;
+    for (int i = sa; i < sb; ++i) {
+      const Vec3 mi = s.total.cell[i];
+      if (mi.squaredNorm() == 0.0 || !fb.allows(m.cell_part[i])) continue;
+      const DipolePair dp =
+          dipole_pair(delta + s.cell_offset[k] - s.cell_offset[i], mk, mi, m.cell_clamp[k] + m.cell_clamp[i]);
+      out.force += dp.force;
+      out.torque += s.cell_offset[k].cross(dp.force) + dp.torque;
+      out.energy += dp.energy;
+    }
+  }
+  if (near) out.near_pairs += near_correction(m, st, s, ta, tb, sa, sb, delta, out, fa, fb);
+}
+
 // Permanent-permanent energy of two bodies, point dipoles cell by cell (clamped as in the
 // kernels): only for bodies that also hold induced cells, whose pair sum mixes both kinds.
-double permanent_pair_energy(const Model& m, const State& s, int ba, int bb) {
+// Cell pairs that the pair's surfaces take are left out (their share comes with the surfaces).
+double permanent_pair_energy(const Model& m, const State& s, int ba, int bb, const PairSurfaces& ps) {
   double e = 0.0;
   const Vec3 delta = s.body_pose[ba].position - s.body_pose[bb].position;
-  for (int k = m.body_cell_begin[ba]; k < m.body_cell_begin[ba + 1]; ++k) {
+  const int a0 = m.body_cell_begin[ba], b0 = m.body_cell_begin[bb];
+  auto surface_takes = [&](int k, int i) {
+    for (int j = 0; j < ps.na; ++j) {
+      if (m.cell_part[k] == ps.a[j] && ps.near_cell[j][i - b0]) return true;
+    }
+    if (ps.in_a(m.cell_part[k])) return false;
+    for (int j = 0; j < ps.nb; ++j) {
+      if (m.cell_part[i] == ps.b[j] && ps.near_cell[ps.na + j][k - a0]) return true;
+    }
+    return false;
+  };
+  for (int k = a0; k < m.body_cell_begin[ba + 1]; ++k) {
     if (m.cell_moment[k].squaredNorm() == 0.0) continue;
-    for (int i = m.body_cell_begin[bb]; i < m.body_cell_begin[bb + 1]; ++i) {
-      if (m.cell_moment[i].squaredNorm() == 0.0) continue;
+    for (int i = b0; i < m.body_cell_begin[bb + 1]; ++i) {
+      if (m.cell_moment[i].squaredNorm() == 0.0 || (ps.any() && surface_takes(k, i))) continue;
       e += dipole_pair(delta + s.cell_offset[k] - s.cell_offset[i], s.permanent.cell[k], s.permanent.cell[i],
                        m.cell_clamp[k] + m.cell_clamp[i])
                .energy;
@@ -216,34 +373,88 @@ void body_forces(const Model& m, const Settings& st, const State& s, const BodyT
   // Dual-tree walk of every pair: refine where close, aggregate where far (serial, so the list
   // and hence the summation order never depend on the thread count).
   std::vector<Interaction> list;
+  std::vector<Walk> all_walks;  // every walk, for the filters of its mixed blocks
   std::vector<std::pair<int, int>> stack;
+  const SurfaceParts surface_parts(m);
+  std::vector<PairSurfaces> psurf(pairs.size());
+  std::vector<Walk> walks;
+  // The leaves of body y (from node n down) that open surface part p of body x get the surface
+  // (an interaction each; their cells marked in `mark`); farther subtrees get a walk against
+  // the part's cells (filters fx on x's side, fy on y's).
+  auto split = [&](int pair, int p, int x, int y, bool y_is_b, const Filter& fy, std::vector<std::uint8_t>& mark) {
+    int stk[128], top = 0;
+    stk[top++] = m.body_root[y];
+    Filter fx;
+    fx.only = p;
+    while (top > 0) {
+      const int n = stk[--top];
+      if (!s.total.node_active[n] || fy.node(m, n) == 0) continue;
+      if (!opens(m, st, s, p, x, y, n)) {
+        walks.push_back(y_is_b ? Walk{pair, m.body_root[x], n, fx, fy} : Walk{pair, n, m.body_root[x], fy, fx});
+        continue;
+      }
+      const int ch = m.node_child[n];
+      if (ch >= 0) {
+        assert(top + m.node_nchild[n] <= 128);
+        for (int c = ch + m.node_nchild[n] - 1; c >= ch; --c) stk[top++] = c;
+        continue;
+      }
+      list.push_back({pair, p, n, y_is_b ? kSurfaceOnB : kSurfaceOnA});
+      for (int c = m.node_begin[n]; c < m.node_end[n]; ++c) mark[c - m.body_cell_begin[y]] = 1;
+    }
+  };
   for (int p = 0; p < static_cast<int>(pairs.size()); ++p) {
     const auto [ba, bb] = pairs[p];
     const Vec3 delta = s.body_pose[ba].position - s.body_pose[bb].position;
-    stack.clear();
-    stack.emplace_back(m.body_root[ba], m.body_root[bb]);
-    while (!stack.empty()) {
-      const auto [na, nb] = stack.back();
-      stack.pop_back();
-      if (!s.total.node_active[na] || !s.total.node_active[nb]) continue;
-      const double d = (delta + s.node_offset[na] - s.node_offset[nb]).norm();
-      const double ra = m.node_radius[na], rb = m.node_radius[nb];
-      const double gap = d - ra - rb;  // lower bound on (centre distance - reaches) of any cell pair
-      const double near_margin = st.near_field * (m.node_reach[na] + m.node_reach[nb]);
-      if (ra + rb < st.theta * d && gap > near_margin) {
-        list.push_back({p, na, nb, kFar});
-        continue;
-      }
-      const int ca = m.node_child[na], cb = m.node_child[nb];
-      if (ca < 0 && cb < 0) {
-        unsigned char kind = kBlock;
-        if (gap < 0.0) kind |= kBlockClamp;
-        if (st.near_field > 0.0 && gap < near_margin) kind |= kBlockNear;
-        list.push_back({p, na, nb, kind});
-      } else if (cb < 0 || (ca >= 0 && ra >= rb)) {
-        for (int k = ca + m.node_nchild[na] - 1; k >= ca; --k) stack.emplace_back(k, nb);
-      } else {
-        for (int k = cb + m.node_nchild[nb] - 1; k >= cb; --k) stack.emplace_back(na, k);
+    PairSurfaces& ps = psurf[p];
+    ps.na = opened_surfaces(m, st, s, surface_parts, ba, bb, ps.a);
+    ps.nb = opened_surfaces(m, st, s, surface_parts, bb, ba, ps.b);
+    walks.clear();
+    walks.push_back({p, m.body_root[ba], m.body_root[bb], Filter{-1, ps.a, ps.na}, Filter{-1, ps.b, ps.nb}});
+    ps.near_cell.resize(ps.na + ps.nb);
+    for (int i = 0; i < ps.na; ++i) {
+      ps.near_cell[i].assign(m.body_cell_begin[bb + 1] - m.body_cell_begin[bb], 0);
+      split(p, ps.a[i], ba, bb, true, Filter{}, ps.near_cell[i]);
+    }
+    for (int i = 0; i < ps.nb; ++i) {
+      ps.near_cell[ps.na + i].assign(m.body_cell_begin[ba + 1] - m.body_cell_begin[ba], 0);
+      split(p, ps.b[i], bb, ba, false, Filter{-1, ps.a, ps.na}, ps.near_cell[ps.na + i]);
+    }
+    for (std::size_t w = 0; w < walks.size(); ++w) {
+      const Walk& wk = walks[w];
+      const int wid = static_cast<int>(all_walks.size());
+      all_walks.push_back(wk);
+      stack.clear();
+      stack.emplace_back(wk.na, wk.nb);
+      while (!stack.empty()) {
+        const auto [na, nb] = stack.back();
+        stack.pop_back();
+        if (!s.total.node_active[na] || !s.total.node_active[nb]) continue;
+        const int pa = wk.fa.node(m, na), pb = wk.fb.node(m, nb);
+        if (pa == 0 || pb == 0) continue;  // no cell on one side is this walk's
+        const bool mixed = pa < 0 || pb < 0;
+        const double d = (delta + s.node_offset[na] - s.node_offset[nb]).norm();
+        const double ra = m.node_radius[na], rb = m.node_radius[nb];
+        const double gap = d - ra - rb;  // lower bound on (centre distance - reaches) of any cell pair
+        const double near_margin = st.near_field * (m.node_reach[na] + m.node_reach[nb]);
+        if (!mixed && ra + rb < st.theta * d && gap > near_margin) {
+          list.push_back({p, na, nb, kFar, wid});
+          continue;
+        }
+        const int ca = m.node_child[na], cb = m.node_child[nb];
+        // A node that the filter splits is opened first.
+        const bool open_a = ca >= 0 && (pa < 0 || cb < 0 || (pb > 0 && ra >= rb));
+        if (ca < 0 && cb < 0) {
+          unsigned char kind = kBlock;
+          if (gap < 0.0) kind |= kBlockClamp;
+          if (st.near_field > 0.0 && gap < near_margin) kind |= kBlockNear;
+          if (mixed) kind |= kBlockMixed;
+          list.push_back({p, na, nb, kind, wid});
+        } else if (open_a) {
+          for (int k = ca + m.node_nchild[na] - 1; k >= ca; --k) stack.emplace_back(k, nb);
+        } else {
+          for (int k = cb + m.node_nchild[nb] - 1; k >= cb; --k) stack.emplace_back(na, k);
+        }
       }
     }
   }
@@ -255,6 +466,28 @@ void body_forces(const Model& m, const Settings& st, const State& s, const BodyT
     const auto [ba, bb] = pairs[it.pair];
     const Vec3 delta = s.body_pose[ba].position - s.body_pose[bb].position;
     PairResult& r = out[q];
+    if (it.kind & (kSurfaceOnA | kSurfaceOnB)) {
+      const PairSurfaces& ps = psurf[it.pair];
+      const int c0 = m.node_begin[it.b], c1 = m.node_end[it.b];
+      if (it.kind & kSurfaceOnA) {
+        r.surface_pairs = surface_on_cells(m, s, it.a, ba, c0, c1, Filter{-1, ps.a, ps.na}, r);
+      } else {
+        // Computed on body b, then as the reaction on a: F_a = -F_b, tau_a = -tau_b + delta x F_b.
+        PairResult on_b;
+        r.surface_pairs = surface_on_cells(m, s, it.a, bb, c0, c1, Filter{}, on_b);
+        r.force = -on_b.force;
+        r.torque = -on_b.torque + delta.cross(on_b.force);
+        r.energy = on_b.energy;
+        r.permanent_energy = on_b.permanent_energy;
+      }
+      return;
+    }
+    if (it.kind & kBlockMixed) {
+      const Walk& wk = all_walks[it.walk];
+      mixed_block(m, st, s, m.node_begin[it.a], m.node_end[it.a], m.node_begin[it.b], m.node_end[it.b], delta, wk.fa,
+                  wk.fb, (it.kind & kBlockNear) != 0, r);
+      return;
+    }
     if (it.kind == kFar) {
       const Vec3 rel = delta + s.node_offset[it.a] - s.node_offset[it.b];
       const DipolePair dp = dipole_pair(rel, s.total.node[it.a], s.total.node[it.b]);
@@ -281,9 +514,13 @@ void body_forces(const Model& m, const Settings& st, const State& s, const BodyT
     t.force += out[q].force;
     t.torque += out[q].torque;
     t.energy += out[q].energy;
+    t.permanent_energy += out[q].permanent_energy;
     t.near_pairs += out[q].near_pairs;
+    t.surface_pairs += out[q].surface_pairs;
     if (list[q].kind == kFar) {
       ++res.stats.node_pairs;
+    } else if (list[q].kind & (kSurfaceOnA | kSurfaceOnB)) {
+      res.stats.surface_pairs += out[q].surface_pairs;
     } else {
       res.stats.cell_pairs += std::int64_t(m.node_end[list[q].a] - m.node_begin[list[q].a]) *
                               (m.node_end[list[q].b] - m.node_begin[list[q].b]);
@@ -304,7 +541,7 @@ void body_forces(const Model& m, const Settings& st, const State& s, const BodyT
     if (!induced_on || (!m.body_induced[ba] && !m.body_induced[bb])) {
       res.energy += sum[p].energy;
     } else if (m.body_permanent[ba] && m.body_permanent[bb]) {
-      res.energy += permanent_pair_energy(m, s, ba, bb);
+      res.energy += permanent_pair_energy(m, s, ba, bb, psurf[p]) + sum[p].permanent_energy;
     }
     res.stats.near_pairs += sum[p].near_pairs;
   }

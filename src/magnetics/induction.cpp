@@ -207,15 +207,30 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
     }
   }
 
-  // Right-hand side: alpha (B_perm + B_applied), permanent near pairs as cuboids.
+  // Right-hand side: alpha (B_perm + B_applied), permanent near pairs as cuboids, and permanent
+  // parts with an exact surface by their surface field where a target group would open them
+  // (the same field as the forces' and the field volumes', physics.md §12); those parts' cells
+  // then add no near correction at that group's targets.
   std::vector<Vec3> B(n);
-  stats.field_pairs += field_at_targets(m, s, s.permanent, t, fopt, B);
+  FieldOptions popt = fopt;
+  popt.surfaces = true;
+  const FieldPlan pplan = plan_field(m, s, s.permanent, t, popt);
+  stats.field_pairs += apply_field_plan(pplan, m, s, s.permanent, t, popt, B);
   Vector b(3 * n);
   std::vector<Vec3> B0(n);  // field of the fixed sources at each target
+  for (int g = 0; g + 1 < static_cast<int>(t.group_begin.size()); ++g) {
+    const auto s0 = pplan.surface.begin() + pplan.surface_begin[g], s1 = pplan.surface.begin() + pplan.surface_end[g];
+    for (int q = t.group_begin[g]; q < t.group_begin[g + 1]; ++q) {
+      Vec3 Bq = B[q] + st.external_field;
+      for (int e = rows.begin[q]; e < rows.begin[q + 1]; ++e) {
+        if (s0 != s1 && std::find(s0, s1, m.cell_part[rows.cell[e]]) != s1) continue;
+        Bq += rows.tensor[e] * s.permanent.cell[rows.cell[e]];
+      }
+      B0[q] = Bq;
+    }
+  }
   for (int q = 0; q < n; ++q) {
-    Vec3 Bq = B[q] + st.external_field;
-    for (int e = rows.begin[q]; e < rows.begin[q + 1]; ++e) Bq += rows.tensor[e] * s.permanent.cell[rows.cell[e]];
-    B0[q] = Bq;
+    const Vec3 Bq = B0[q];
     b.segment<3>(3 * q) = alpha[q] * Bq;
   }
 

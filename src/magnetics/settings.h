@@ -68,6 +68,7 @@ struct EvalStats {
   std::int64_t node_pairs = 0;   ///< aggregated dipole–dipole interactions
   std::int64_t cell_pairs = 0;   ///< cell–cell interactions in leaf blocks
   std::int64_t near_pairs = 0;   ///< cell pairs corrected by the exact cuboid near field
+  std::int64_t surface_pairs = 0;  ///< cell–triangle evaluations of exact surfaces (forces)
   std::int64_t field_pairs = 0;  ///< source–target field evaluations (induction, probes)
 };
 

@@ -46,6 +46,13 @@ struct SurfaceMesh {
   std::vector<Eigen::Vector3i> face;        ///< corners, counter-clockwise seen from outside, by group
   std::vector<int> group_begin;             ///< (ngroup + 1) faces of group g: [begin[g], begin[g+1])
   std::vector<Vec3> group_weight;           ///< sigma n of the group's faces, A/m
+  /// Boundary of each group, for the gradient: the directed edges (a -> b, counter-clockwise
+  /// seen from outside) of its faces that no other face of the group runs the other way;
+  /// group g's are [loop_begin[g], loop_begin[g+1]).
+  std::vector<int> loop_begin;
+  std::vector<Eigen::Vector2i> loop_edge;
+  std::vector<Vec3> loop_tangent;   ///< unit (b - a) of each boundary edge
+  std::vector<double> loop_length;  ///< |b - a|, m
   Vec3 magnetization = Vec3::Zero();        ///< M, A/m (added inside)
 
   /// From a closed triangle soup as surface_b_field() takes it (corners that are bitwise equal
@@ -54,6 +61,12 @@ struct SurfaceMesh {
   /// B (tesla) at x, as surface_b_field() of the soup it was built from (to ~1e-12 relative).
   /// `scratch` is resized to the corner count (reuse it across calls).
   Vec3 b_field(const Vec3& x, std::vector<double>& scratch) const;
+  /// B (tesla) at x and its gradient G(i, j) = dB_i/dx_j (T/m), both in the mesh's frame: the
+  /// edge logarithms differentiated, and each group's solid angle through the Biot–Savart line
+  /// integral around its boundary (physics.md §12). Outside the magnet G is symmetric and
+  /// traceless, and the force on a point dipole m at x is G^T m. Same edge and corner guards as
+  /// b_field (a term that is infinite at x is left out).
+  void b_field_gradient(const Vec3& x, std::vector<double>& scratch, Vec3& B, Mat3& G) const;
 };
 
 }  // namespace magbake::magnetics
