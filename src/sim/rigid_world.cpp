@@ -111,6 +111,23 @@ class ContactWorld : public btDiscreteDynamicsWorld {
     }
   }
 
+  // Contacts of convex hulls (cylinders, mesh pieces) are made afresh in every step: their
+  // manifolds are emptied before collision detection, so the clipped contact face of this step
+  // is all there is. Kept, a persistent manifold's four slots held stale points of the face a
+  // rolling cylinder had left (inside the breaking distance), and a rim that sank elsewhere was
+  // seen only when it replaced one of them, 0.1 mm deep (physics.md §8 item 10).
+  void performDiscreteCollisionDetection() override {
+    auto hull = [](const btCollisionObject* o) {
+      const int t = o->getCollisionShape()->getShapeType();
+      return t == CONVEX_HULL_SHAPE_PROXYTYPE || t == COMPOUND_SHAPE_PROXYTYPE;
+    };
+    for (int k = 0; k < m_dispatcher1->getNumManifolds(); ++k) {
+      btPersistentManifold* mf = m_dispatcher1->getManifoldByIndexInternal(k);
+      if (hull(mf->getBody0()) || hull(mf->getBody1())) mf->clearManifold();
+    }
+    btDiscreteDynamicsWorld::performDiscreteCollisionDetection();
+  }
+
   void solveConstraints(btContactSolverInfo& info) override {
     for (int k = 0; k < m_dispatcher1->getNumManifolds(); ++k) {
       btPersistentManifold* mf = m_dispatcher1->getManifoldByIndexInternal(k);
@@ -154,6 +171,10 @@ struct RigidWorld::Impl {
   std::vector<bool> magnetic;    // per body: has magnetic material
   std::vector<bool> permanent;   // per body: has permanently magnetized material
   std::vector<double> extent;    // per body: smallest bounding-box extent of its shape, m
+  // Per body: how far a turn about its centre of mass can move its surface, m (half its bounding
+  // box's diagonal plus the centre's offset; 0 for a sphere about its centre, which a turn maps
+  // onto itself).
+  std::vector<double> turn_reach;
   std::vector<double> aabb_pad;  // per body: broadphase box padding, m (ContactWorld::updateAabbs)
   // Bullet's dynamic-tree margin (the global gDbvtMargin, 5 cm by default: a proxy's tree box
   // is that much larger than its AABB, and pairs live while tree boxes overlap). Set to this
@@ -176,21 +197,43 @@ struct RigidWorld::Impl {
     return sh;
   }
 
+  // A convex hull's margin lies outside its vertices (a box's and a btCylinderShape's inside
+  // their sizes): GJK pairs (a sphere on a hull) meet the hull grown by it, SAT-clipped pairs
+  // the vertices themselves. At most 1 um, so that both see the same surface (a steel ball
+  // resting on a cylinder magnet sat 10 um above it with 10 um).
+  static double hull_margin(double margin) { return std::min(margin, 1e-6); }
+
+  // A cylinder as the convex hull of its area-true prism (geometry::CylinderShape::surface),
+  // its sides within 2e-3 of the radius of the circle (50 sides), with polyhedral features. Bullet's
+  // btCylinderShape goes through GJK, which finds one contact point per step: a cylinder lying
+  // on a face (a line contact) rocked about that point until its far rim sank 0.16 mm unseen,
+  // and the push-out then threw the pair apart (a magnet box and a cylinder gained 10-20% of
+  // their binding energy at any dt, physics.md §8). Polyhedral hulls get the whole clipped
+  // contact face in every step, like boxes (Bullet's btPolyhedralContactClipping).
+  btCollisionShape* cylinder_hull(const geometry::Shape& shape, double radius, double margin) {
+    std::vector<Vec3> v;
+    std::vector<Eigen::Vector3i> t;
+    shape.surface(2e-3 * radius, v, t);
+    auto* h = new btConvexHullShape();
+    for (const Vec3& p : v) h->addPoint(bt(p), false);
+    h->recalcLocalAabb();
+    h->setMargin(hull_margin(margin));
+    h->initializePolyhedralFeatures();
+    return own(h);
+  }
+
   // Collision shape of a scene shape in its own frame.
   btCollisionShape* make_shape(const scene::ShapeDesc& d, bool dynamic, double margin) {
     using geometry::ShapeKind;
     switch (d.kind) {
       case ShapeKind::kBox: {
-        auto* s = own(new btBoxShape(bt(0.5 * d.size)));
+        auto* s = new btBoxShape(bt(0.5 * d.size));
         s->setMargin(margin);
-        return s;
+        s->initializePolyhedralFeatures();
+        return own(s);
       }
       case ShapeKind::kSphere: return own(new btSphereShape(d.radius));
-      case ShapeKind::kCylinder: {
-        auto* s = own(new btCylinderShapeZ(btVector3(d.radius, d.radius, 0.5 * d.height)));
-        s->setMargin(margin);
-        return s;
-      }
+      case ShapeKind::kCylinder: return cylinder_hull(*d.shape, d.radius, margin);
       case ShapeKind::kTorus:
       case ShapeKind::kMesh: break;
     }
@@ -234,7 +277,8 @@ struct RigidWorld::Impl {
       auto* h = new btConvexHullShape();
       for (const Vec3& p : hull) h->addPoint(bt(p), false);
       h->recalcLocalAabb();
-      h->setMargin(margin);
+      h->setMargin(hull_margin(margin));
+      h->initializePolyhedralFeatures();
       own(h);
       btTransform id;
       id.setIdentity();
@@ -270,6 +314,12 @@ RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>
   m.dispatcher.registerCollisionCreateFunc(SPHERE_SHAPE_PROXYTYPE, SPHERE_SHAPE_PROXYTYPE, &m.sphere_sphere);
   m.world->setGravity(bt(scene.gravity));
   m.world->getDispatchInfo().m_deterministicOverlappingPairs = true;
+  // Polyhedral pairs (boxes against hulls, hulls against hulls and triangles) clip their contact
+  // faces along the separating axis found by SAT, not along GJK's normal: with GJK's normal
+  // (computed between margin-shrunk cores) a cylinder lying on a box clipped the wrong facet
+  // while its rim sank 0.15 mm, and the late push-out gained 7-20% of the pair's binding energy
+  // at any dt (physics.md §8 item 10).
+  m.world->getDispatchInfo().m_enableSatConvex = true;
   btContactSolverInfo& si = m.world->getSolverInfo();
   si.m_numIterations = 20;
   // Stop iterating once no contact row changes a velocity by more than 1e-7 m/s (Bullet's
@@ -353,6 +403,9 @@ RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>
     for (const auto& p : b.parts) perm = perm || (p.material >= 0 && scene.materials[p.material].kind == magnetics::MaterialKind::kPermanent);
     m.permanent.push_back(perm);
     m.extent.push_back(extent);
+    const Eigen::AlignedBox3d box = b.shape.shape->bounds();
+    const bool round = b.shape.kind == geometry::ShapeKind::kSphere && b.com.norm() < 1e-12;
+    m.turn_reach.push_back(round ? 0.0 : 0.5 * box.sizes().norm() + (box.center() - b.com).norm());
     m.aabb_pad.push_back(std::min<double>(gContactBreakingThreshold, 0.5 * extent));
     if (dynamic) m.dbvt_margin = std::min(m.dbvt_margin, 0.25 * extent);
     // At its initial pose before it enters the broadphase: added at the origin, every body's box
@@ -528,8 +581,13 @@ void RigidWorld::closing_rates(std::vector<double>& rate) const {
     // the strongest there is), one dynamic. Steel meeting a magnet is left to the force guard:
     // guarding it too made the 250 steel balls of DragonLow take 37 pieces per 1 ms, not 6.
     if (!m.permanent[i] || !m.permanent[j] || !(dyn_i || dyn_j)) continue;
-    // Pairs already touching are the contact solver's (it stops them within the step); only a
-    // pair that is still apart and approaching can sink in at impact.
+    // Pairs already touching are the contact solver's (it stops them within the step) as far as
+    // their approach goes; but one that turns against the other (a tumbling cylinder that has
+    // met a box with its rim and slams its side down) closes elsewhere at up to the turn rate
+    // times its reach: the smaller of the two bodies' turn reaches, relative turn rate.
+    const auto* b0 = btRigidBody::upcast(o0);
+    const auto* b1 = btRigidBody::upcast(o1);
+    const double length = 0.01 * std::min(m.extent[i], m.extent[j]);
     if (pairs[k].m_algorithm) {
       btManifoldArray manifolds;
       pairs[k].m_algorithm->getAllContactManifolds(manifolds);
@@ -539,15 +597,18 @@ void RigidWorld::closing_rates(std::vector<double>& rate) const {
           if (manifolds[q]->getContactPoint(c).getDistance() < 1e-4) touching = true;
         }
       }
-      if (touching) continue;
+      if (touching) {
+        const double turn = (b1->getAngularVelocity() - b0->getAngularVelocity()).length() *
+                            std::min(m.turn_reach[i], m.turn_reach[j]);
+        rate[i] = std::max(rate[i], turn / length);
+        rate[j] = std::max(rate[j], turn / length);
+        continue;
+      }
     }
-    const auto* b0 = btRigidBody::upcast(o0);
-    const auto* b1 = btRigidBody::upcast(o1);
     const btVector3 dir = b1->getCenterOfMassPosition() - b0->getCenterOfMassPosition();
     if (dir.length2() == 0) continue;
     const double approach = (b0->getLinearVelocity() - b1->getLinearVelocity()).dot(dir.normalized());
     if (approach <= 0) continue;
-    const double length = 0.01 * std::min(m.extent[i], m.extent[j]);
     rate[i] = std::max(rate[i], approach / length);
     rate[j] = std::max(rate[j], approach / length);
   }
