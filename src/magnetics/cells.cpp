@@ -220,7 +220,7 @@ struct TreeBuilder {
 };
 
 // Copies the parts' surfaces into the model with each triangle's charge density and a bounding
-// sphere per part.
+// sphere per part, and lists the parts with a surface by body.
 void set_surfaces(Model& m, const PartTable& parts) {
   const int np = static_cast<int>(parts.body.size());
   if (parts.surface_begin.empty() || parts.surface_begin.back() == 0) return;
@@ -248,6 +248,16 @@ void set_surfaces(Model& m, const PartTable& parts) {
     if (!m.part_surface_mesh[p].build(&m.surface_vertex[3 * t0], &sigma[t0], t1 - t0, parts.magnetization[p])) {
       throw std::runtime_error("magnetics: the surface of part " + std::to_string(p) + " is not closed");
     }
+  }
+  m.body_surface_begin.assign(m.body_count + 1, 0);
+  for (int p = 0; p < np; ++p) {
+    if (m.surface_triangles(p) > 0) ++m.body_surface_begin[parts.body[p] + 1];
+  }
+  for (int b = 0; b < m.body_count; ++b) m.body_surface_begin[b + 1] += m.body_surface_begin[b];
+  m.body_surface_part.resize(m.body_surface_begin[m.body_count]);
+  std::vector<int> fill(m.body_surface_begin.begin(), m.body_surface_begin.end() - 1);
+  for (int p = 0; p < np; ++p) {
+    if (m.surface_triangles(p) > 0) m.body_surface_part[fill[parts.body[p]]++] = p;
   }
 }
 

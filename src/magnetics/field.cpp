@@ -292,19 +292,7 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
   plan.surface_begin.assign(std::max(ngroup, 0), 0);
   plan.surface_end.assign(std::max(ngroup, 0), 0);
   if (bt.empty() || ngroup <= 0) return plan;
-  // Parts with an exact surface, by body.
-  std::vector<int> surf_begin(m.body_count + 1, 0), surf_part;
-  if (opt.surfaces && m.has_surfaces()) {
-    for (int p = 0; p < static_cast<int>(m.part_body.size()); ++p) {
-      if (m.surface_triangles(p) > 0) ++surf_begin[m.part_body[p] + 1];
-    }
-    for (int b = 0; b < m.body_count; ++b) surf_begin[b + 1] += surf_begin[b];
-    surf_part.resize(surf_begin[m.body_count]);
-    std::vector<int> fill(surf_begin.begin(), surf_begin.end() - 1);
-    for (int p = 0; p < static_cast<int>(m.part_body.size()); ++p) {
-      if (m.surface_triangles(p) > 0) surf_part[fill[m.part_body[p]]++] = p;
-    }
-  }
+  const bool surfaces = opt.surfaces && !m.body_surface_part.empty();
   BodyTreeSources agg;
   agg.aggregate(bt, m, src);
   BodyTree& tt = plan.target_tree;
@@ -389,10 +377,10 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
         // A surface part that the group would open gives its exact field, and its cells none.
         constexpr int kMaxSurfaces = 16;
         int excl[kMaxSurfaces], nexcl = 0;
-        for (int i = surf_begin[body]; i < surf_begin[body + 1] && nexcl < kMaxSurfaces; ++i) {
-          const int p = surf_part[i];
-          const double dp = (origin + s.body_rotation[body] * m.part_surface_center[p] - gc).norm();
-          if (m.part_surface_radius[p] + gr < opt.theta * dp) continue;
+        const int s0 = surfaces ? m.body_surface_begin[body] : 0, s1 = surfaces ? m.body_surface_begin[body + 1] : 0;
+        for (int i = s0; i < s1 && nexcl < kMaxSurfaces; ++i) {
+          const int p = m.body_surface_part[i];
+          if (!m.opens_surface(p, origin, s.body_rotation[body], gc, gr, opt.theta)) continue;
           excl[nexcl++] = p;
           surface[k].push_back(p);
         }

@@ -66,7 +66,8 @@ struct PairSurfaces {
   int na = 0, nb = 0;
   int a[kMaxPairSurfaces], b[kMaxPairSurfaces];
   // Per opened surface (a's first, then b's): 1 for each cell of the other body in a leaf
-  // that takes the surface (index: cell - first cell of that body).
+  // that takes the surface (index: cell - first cell of that body). Filled only for the pairs
+  // whose energy permanent_pair_energy() sums (the one reader).
   std::vector<std::vector<std::uint8_t>> near_cell;
   bool any() const { return na + nb > 0; }
   bool in_a(int part) const { return std::find(a, a + na, part) != a + na; }
@@ -78,40 +79,19 @@ struct Walk {
   Filter fa, fb;
 };
 
-// Parts with a surface, by body (empty when the model has none).
-struct SurfaceParts {
-  std::vector<int> begin, part;
-  explicit SurfaceParts(const Model& m) {
-    if (!m.has_surfaces()) return;
-    begin.assign(m.body_count + 1, 0);
-    for (int p = 0; p < static_cast<int>(m.part_body.size()); ++p) {
-      if (m.surface_triangles(p) > 0) ++begin[m.part_body[p] + 1];
-    }
-    for (int b = 0; b < m.body_count; ++b) begin[b + 1] += begin[b];
-    part.resize(begin[m.body_count]);
-    std::vector<int> fill(begin.begin(), begin.end() - 1);
-    for (int p = 0; p < static_cast<int>(m.part_body.size()); ++p) {
-      if (m.surface_triangles(p) > 0) part[fill[m.part_body[p]]++] = p;
-    }
-  }
-  bool empty() const { return part.empty(); }
-};
-
-// Whether node n of body y would open surface part p of body x: the theta test on the part's
-// bounding sphere and the node's, as field.cpp's target groups.
+// Whether node n of body y would open surface part p of body x (Model::opens_surface, as
+// field.cpp's target groups).
 bool opens(const Model& m, const Settings& st, const State& s, int p, int x, int y, int n) {
-  const Vec3 cp = s.body_pose[x].position + s.body_rotation[x] * m.part_surface_center[p];
-  const double d = (cp - s.body_pose[y].position - s.node_offset[n]).norm();
-  return !(m.part_surface_radius[p] + m.node_radius[n] < st.theta * d);
+  return m.opens_surface(p, s.body_pose[x].position, s.body_rotation[x], s.body_pose[y].position + s.node_offset[n],
+                         m.node_radius[n], st.theta);
 }
 
 // The surfaces of body x opened by body y's root node.
-int opened_surfaces(const Model& m, const Settings& st, const State& s, const SurfaceParts& sp, int x, int y,
-                    int* out) {
+int opened_surfaces(const Model& m, const Settings& st, const State& s, int x, int y, int* out) {
   int n = 0;
-  if (sp.empty()) return 0;
-  for (int i = sp.begin[x]; i < sp.begin[x + 1] && n < kMaxPairSurfaces; ++i) {
-    if (opens(m, st, s, sp.part[i], x, y, m.body_root[y])) out[n++] = sp.part[i];
+  if (m.body_surface_part.empty()) return 0;
+  for (int i = m.body_surface_begin[x]; i < m.body_surface_begin[x + 1] && n < kMaxPairSurfaces; ++i) {
+    if (opens(m, st, s, m.body_surface_part[i], x, y, m.body_root[y])) out[n++] = m.body_surface_part[i];
   }
   return n;
 }
@@ -375,13 +355,19 @@ void body_forces(const Model& m, const Settings& st, const State& s, const BodyT
   std::vector<Interaction> list;
   std::vector<Walk> all_walks;  // every walk, for the filters of its mixed blocks
   std::vector<std::pair<int, int>> stack;
-  const SurfaceParts surface_parts(m);
   std::vector<PairSurfaces> psurf(pairs.size());
+  // Energy: a pair's own when both bodies are purely permanent; pairs with induced cells get
+  // theirs from the induction solve (-1/2 m_ind.B_0), plus the permanent-permanent part of
+  // bodies that carry both kinds, summed apart (permanent_pair_energy).
+  const bool induced_on = m.has_induced() && st.induction != InductionMode::kOff;
+  auto mixed_permanent_pair = [&](int ba, int bb) {
+    return induced_on && (m.body_induced[ba] || m.body_induced[bb]) && m.body_permanent[ba] && m.body_permanent[bb];
+  };
   std::vector<Walk> walks;
   // The leaves of body y (from node n down) that open surface part p of body x get the surface
   // (an interaction each; their cells marked in `mark`); farther subtrees get a walk against
   // the part's cells (filters fx on x's side, fy on y's).
-  auto split = [&](int pair, int p, int x, int y, bool y_is_b, const Filter& fy, std::vector<std::uint8_t>& mark) {
+  auto split = [&](int pair, int p, int x, int y, bool y_is_b, const Filter& fy, std::vector<std::uint8_t>* mark) {
     int stk[128], top = 0;
     stk[top++] = m.body_root[y];
     Filter fx;
@@ -400,25 +386,29 @@ void body_forces(const Model& m, const Settings& st, const State& s, const BodyT
         continue;
       }
       list.push_back({pair, p, n, y_is_b ? kSurfaceOnB : kSurfaceOnA});
-      for (int c = m.node_begin[n]; c < m.node_end[n]; ++c) mark[c - m.body_cell_begin[y]] = 1;
+      if (mark) {
+        for (int c = m.node_begin[n]; c < m.node_end[n]; ++c) (*mark)[c - m.body_cell_begin[y]] = 1;
+      }
     }
   };
   for (int p = 0; p < static_cast<int>(pairs.size()); ++p) {
     const auto [ba, bb] = pairs[p];
     const Vec3 delta = s.body_pose[ba].position - s.body_pose[bb].position;
     PairSurfaces& ps = psurf[p];
-    ps.na = opened_surfaces(m, st, s, surface_parts, ba, bb, ps.a);
-    ps.nb = opened_surfaces(m, st, s, surface_parts, bb, ba, ps.b);
+    ps.na = opened_surfaces(m, st, s, ba, bb, ps.a);
+    ps.nb = opened_surfaces(m, st, s, bb, ba, ps.b);
     walks.clear();
     walks.push_back({p, m.body_root[ba], m.body_root[bb], Filter{-1, ps.a, ps.na}, Filter{-1, ps.b, ps.nb}});
-    ps.near_cell.resize(ps.na + ps.nb);
+    // The cells each surface takes are marked only for the one reader, permanent_pair_energy().
+    const bool marks = mixed_permanent_pair(ba, bb);
+    if (marks) ps.near_cell.resize(ps.na + ps.nb);
     for (int i = 0; i < ps.na; ++i) {
-      ps.near_cell[i].assign(m.body_cell_begin[bb + 1] - m.body_cell_begin[bb], 0);
-      split(p, ps.a[i], ba, bb, true, Filter{}, ps.near_cell[i]);
+      if (marks) ps.near_cell[i].assign(m.body_cell_begin[bb + 1] - m.body_cell_begin[bb], 0);
+      split(p, ps.a[i], ba, bb, true, Filter{}, marks ? &ps.near_cell[i] : nullptr);
     }
     for (int i = 0; i < ps.nb; ++i) {
-      ps.near_cell[ps.na + i].assign(m.body_cell_begin[ba + 1] - m.body_cell_begin[ba], 0);
-      split(p, ps.b[i], bb, ba, false, Filter{-1, ps.a, ps.na}, ps.near_cell[ps.na + i]);
+      if (marks) ps.near_cell[ps.na + i].assign(m.body_cell_begin[ba + 1] - m.body_cell_begin[ba], 0);
+      split(p, ps.b[i], bb, ba, false, Filter{-1, ps.a, ps.na}, marks ? &ps.near_cell[ps.na + i] : nullptr);
     }
     for (std::size_t w = 0; w < walks.size(); ++w) {
       const Walk& wk = walks[w];
@@ -527,7 +517,6 @@ void body_forces(const Model& m, const Settings& st, const State& s, const BodyT
     }
   }
   // Apply each pair to both bodies: F_b = -F_a, tau_b = -tau_a - (R_a - R_b) x F_a.
-  const bool induced_on = m.has_induced() && st.induction != InductionMode::kOff;
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     const auto [ba, bb] = pairs[p];
     const Vec3 delta = s.body_pose[ba].position - s.body_pose[bb].position;
@@ -535,12 +524,10 @@ void body_forces(const Model& m, const Settings& st, const State& s, const BodyT
     res.torque[ba] += sum[p].torque;
     res.force[bb] -= sum[p].force;
     res.torque[bb] -= sum[p].torque + delta.cross(sum[p].force);
-    // Energy: the pair's own when both bodies are purely permanent; pairs with induced cells
-    // get theirs from the induction solve (-1/2 m_ind.B_0), plus the permanent-permanent part
-    // of bodies that carry both kinds.
+    // Energy (see mixed_permanent_pair).
     if (!induced_on || (!m.body_induced[ba] && !m.body_induced[bb])) {
       res.energy += sum[p].energy;
-    } else if (m.body_permanent[ba] && m.body_permanent[bb]) {
+    } else if (mixed_permanent_pair(ba, bb)) {
       res.energy += permanent_pair_energy(m, s, ba, bb, psurf[p]) + sum[p].permanent_energy;
     }
     res.stats.near_pairs += sum[p].near_pairs;

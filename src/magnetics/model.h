@@ -106,6 +106,17 @@ struct Model {
   std::vector<Vec3> part_surface_center; ///< (npart x 3) centre of a sphere around the surface, body frame, m
   std::vector<double> part_surface_radius;  ///< (npart) its radius, m (0 without a surface)
   std::vector<SurfaceMesh> part_surface_mesh;  ///< (npart) the same triangles prepared for evaluation
+  /// Parts with a surface, by body: body b's are body_surface_part[body_surface_begin[b] ..
+  /// body_surface_begin[b+1]) (both empty when no part has one).
+  std::vector<int> body_surface_begin;   ///< (nbody + 1)
+  std::vector<int> body_surface_part;    ///< part indices, by body
+  /// Whether a group of cells or targets inside the sphere (c, r) (world frame, m) is near
+  /// enough to surface part p, of a body at position x with rotation R, to take the part's exact
+  /// field instead of its cells: the theta test between the group and the part's bounding sphere,
+  /// as nodes open each other (physics.md §5, §12). Forces and field evaluation both use it.
+  bool opens_surface(int p, const Vec3& x, const Mat3& R, const Vec3& c, double r, double theta) const {
+    return !(part_surface_radius[p] + r < theta * (x + R * part_surface_center[p] - c).norm());
+  }
   bool has_surfaces() const { return !surface_vertex.empty(); }
   /// Triangles of all surfaces.
   int surface_triangle_count() const { return static_cast<int>(surface_vertex.size() / 3); }

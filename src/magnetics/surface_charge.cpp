@@ -148,110 +148,91 @@ bool SurfaceMesh::build(const Vec3* vertex, const double* sigma, int ntri, const
   return true;
 }
 
-Vec3 SurfaceMesh::b_field(const Vec3& x, std::vector<double>& d) const {
-  const int np = static_cast<int>(point.size());
+namespace {
+
+// B (tesla) of the surface at x and, with kGradient, its gradient G_ij = dB_i/dx_j (T/m): one
+// pass over the shared corners, the weighted edges and the flat groups, so the field and its
+// gradient come from the same terms in the same order.
+template <bool kGradient>
+Vec3 surface_field(const SurfaceMesh& sm, const Vec3& x, std::vector<double>& d, Mat3* G) {
+  const int np = static_cast<int>(sm.point.size());
   d.resize(np);
-  for (int v = 0; v < np; ++v) d[v] = (point[v] - x).norm();
+  for (int v = 0; v < np; ++v) d[v] = (sm.point[v] - x).norm();
   Vec3 H = Vec3::Zero();
-  for (std::size_t e = 0; e < edge.size(); ++e) {
-    const int a = edge[e][0], b = edge[e][1];
-    const Vec3& t = edge_tangent[e];
-    const double s1 = (point[a] - x).dot(t), s2 = (point[b] - x).dot(t);
+  Mat3 J = Mat3::Zero();  // dH_i/dx_j times 4pi
+  for (std::size_t e = 0; e < sm.edge.size(); ++e) {
+    const int a = sm.edge[e][0], b = sm.edge[e][1];
+    const Vec3& t = sm.edge_tangent[e];
+    const Vec3 pa = sm.point[a] - x, pb = sm.point[b] - x;
+    const double s1 = pa.dot(t), s2 = pb.dot(t);
     const double num = s1 > 0 ? d[b] + s2 : d[a] - s1, den = s1 > 0 ? d[a] + s1 : d[b] - s2;
     // On the edge itself the field is logarithmically infinite: that edge is left out there
     // (a voxel or probe exactly on a facet edge gets a finite value, not NaN).
     if (!(num > 0 && den > 0)) continue;
-    H += std::log(num / den) * edge_weight[e];
+    H += std::log(num / den) * sm.edge_weight[e];
+    if constexpr (kGradient) {
+      // d r_k/dx = -u_k (u_k = unit vector from x to corner k), d s_k/dx = -t.
+      const Vec3 ua = pa / d[a], ub = pb / d[b];
+      const Vec3 grad = s1 > 0 ? Vec3((ua + t) / den - (ub + t) / num) : Vec3((t - ua) / num - (t - ub) / den);
+      J += sm.edge_weight[e] * grad.transpose();
+    }
   }
   double angle = 0;
-  for (std::size_t g = 0; g + 1 < group_begin.size(); ++g) {
+  for (std::size_t g = 0; g + 1 < sm.group_begin.size(); ++g) {
     // Half solid angles add: multiply (den + i num) of the group's triangles, kept at unit scale.
     double X = 1, Y = 0;
-    for (int f = group_begin[g]; f < group_begin[g + 1]; ++f) {
-      const int i = face[f][0], j = face[f][1], k = face[f][2];
-      const Vec3 a = point[i] - x, b = point[j] - x, c = point[k] - x;
+    for (int f = sm.group_begin[g]; f < sm.group_begin[g + 1]; ++f) {
+      const int i = sm.face[f][0], j = sm.face[f][1], k = sm.face[f][2];
+      const Vec3 a = sm.point[i] - x, b = sm.point[j] - x, c = sm.point[k] - x;
       const double num = a.dot(b.cross(c));
       const double den = d[i] * d[j] * d[k] + a.dot(b) * d[k] + a.dot(c) * d[j] + b.dot(c) * d[i];
       const double nx = X * den - Y * num, ny = X * num + Y * den;
       const double s = std::max(std::abs(nx), std::abs(ny));
-      if (!(s > 0)) {  // the target on a corner: this triangle subtends nothing
-        continue;
-      }
+      if (!(s > 0)) continue;  // the target on a corner: this triangle subtends nothing
       X = nx / s, Y = ny / s;
     }
     const double nE = -2.0 * std::atan2(Y, X);
-    H += nE * group_weight[g];
+    H += nE * sm.group_weight[g];
     angle += nE;
+    if constexpr (kGradient) {
+      // grad of the solid angle = sum over the boundary of the line integral of
+      // dl x (x - y)/|x - y|^3 (the field of a unit current loop); n . E is minus the solid angle.
+      Vec3 grad = Vec3::Zero();
+      for (int e = sm.loop_begin[g]; e < sm.loop_begin[g + 1]; ++e) {
+        const int a = sm.loop_edge[e][0], b = sm.loop_edge[e][1];
+        const Vec3 pa = sm.point[a] - x;
+        const Vec3& t = sm.loop_tangent[e];
+        const double len = sm.loop_length[e];
+        const double s1 = pa.dot(t), s2 = s1 + len;
+        const Vec3 txp = pa.cross(t);  // t x (x - a)
+        double f;
+        if (s1 * s2 > 0) {
+          // (s2/r2 - s1/r1)/rho^2 without cancellation when x is beyond either end.
+          const double den = d[a] * d[b] * (s2 * d[a] + s1 * d[b]);
+          if (!(den != 0)) continue;  // on a corner
+          f = len * (s1 + s2) / den;
+        } else {
+          const double rho2 = txp.squaredNorm();
+          if (!(rho2 > 0)) continue;  // on the edge: infinite, left out
+          f = (s2 / d[b] - s1 / d[a]) / rho2;
+        }
+        grad += f * txp;
+      }
+      J -= sm.group_weight[g] * grad.transpose();
+    }
   }
   H /= 4.0 * std::numbers::pi;
-  if (angle < -2.0 * std::numbers::pi - 1e-9) H += magnetization;
+  if (angle < -2.0 * std::numbers::pi - 1e-9) H += sm.magnetization;
+  if constexpr (kGradient) *G = (kMu0 / (4.0 * std::numbers::pi)) * J;
   return kMu0 * H;
 }
 
+}  // namespace
+
+Vec3 SurfaceMesh::b_field(const Vec3& x, std::vector<double>& d) const { return surface_field<false>(*this, x, d, nullptr); }
+
 void SurfaceMesh::b_field_gradient(const Vec3& x, std::vector<double>& d, Vec3& B, Mat3& G) const {
-  const int np = static_cast<int>(point.size());
-  d.resize(np);
-  for (int v = 0; v < np; ++v) d[v] = (point[v] - x).norm();
-  Vec3 H = Vec3::Zero();
-  Mat3 J = Mat3::Zero();  // dH_i/dx_j times 4pi
-  for (std::size_t e = 0; e < edge.size(); ++e) {
-    const int a = edge[e][0], b = edge[e][1];
-    const Vec3& t = edge_tangent[e];
-    const Vec3 pa = point[a] - x, pb = point[b] - x;
-    const double s1 = pa.dot(t), s2 = pb.dot(t);
-    const double num = s1 > 0 ? d[b] + s2 : d[a] - s1, den = s1 > 0 ? d[a] + s1 : d[b] - s2;
-    if (!(num > 0 && den > 0)) continue;
-    H += std::log(num / den) * edge_weight[e];
-    // d r_k/dx = -u_k (u_k = unit vector from x to corner k), d s_k/dx = -t.
-    const Vec3 ua = pa / d[a], ub = pb / d[b];
-    const Vec3 grad = s1 > 0 ? Vec3((ua + t) / den - (ub + t) / num) : Vec3((t - ua) / num - (t - ub) / den);
-    J += edge_weight[e] * grad.transpose();
-  }
-  double angle = 0;
-  for (std::size_t g = 0; g + 1 < group_begin.size(); ++g) {
-    double X = 1, Y = 0;
-    for (int f = group_begin[g]; f < group_begin[g + 1]; ++f) {
-      const int i = face[f][0], j = face[f][1], k = face[f][2];
-      const Vec3 a = point[i] - x, b = point[j] - x, c = point[k] - x;
-      const double num = a.dot(b.cross(c));
-      const double den = d[i] * d[j] * d[k] + a.dot(b) * d[k] + a.dot(c) * d[j] + b.dot(c) * d[i];
-      const double nx = X * den - Y * num, ny = X * num + Y * den;
-      const double s = std::max(std::abs(nx), std::abs(ny));
-      if (!(s > 0)) continue;
-      X = nx / s, Y = ny / s;
-    }
-    const double nE = -2.0 * std::atan2(Y, X);
-    H += nE * group_weight[g];
-    angle += nE;
-    // grad of the solid angle = sum over the boundary of the line integral of dl x (x - y)/|x - y|^3
-    // (the field of a unit current loop); n . E is minus the solid angle.
-    Vec3 grad = Vec3::Zero();
-    for (int e = loop_begin[g]; e < loop_begin[g + 1]; ++e) {
-      const int a = loop_edge[e][0], b = loop_edge[e][1];
-      const Vec3 pa = point[a] - x;
-      const Vec3& t = loop_tangent[e];
-      const double len = loop_length[e];
-      const double s1 = pa.dot(t), s2 = s1 + len;
-      const Vec3 txp = pa.cross(t);  // t x (x - a)
-      double f;
-      if (s1 * s2 > 0) {
-        // (s2/r2 - s1/r1)/rho^2 without cancellation when x is beyond either end.
-        const double den = d[a] * d[b] * (s2 * d[a] + s1 * d[b]);
-        if (!(den != 0)) continue;  // on a corner
-        f = len * (s1 + s2) / den;
-      } else {
-        const double rho2 = txp.squaredNorm();
-        if (!(rho2 > 0)) continue;  // on the edge: infinite, left out
-        f = (s2 / d[b] - s1 / d[a]) / rho2;
-      }
-      grad += f * txp;
-    }
-    J -= group_weight[g] * grad.transpose();
-  }
-  H /= 4.0 * std::numbers::pi;
-  if (angle < -2.0 * std::numbers::pi - 1e-9) H += magnetization;
-  B = kMu0 * H;
-  G = (kMu0 / (4.0 * std::numbers::pi)) * J;
+  B = surface_field<true>(*this, x, d, &G);
 }
 
 }  // namespace magbake::magnetics

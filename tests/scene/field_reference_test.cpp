@@ -12,18 +12,12 @@
 #include "magnetics/system.h"
 #include "scene/load.h"
 #include "scene/scene_magnetics.h"
+#include "support/reference_text.h"
 
 namespace magbake::testing {
 namespace {
 
 using magnetics::Vec3;
-
-std::string source_dir() { return MAGBAKE_SOURCE_DIR; }
-
-std::string replace_all(std::string s, const std::string& what, const std::string& with) {
-  for (std::size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + with.size())) s.replace(at, what.size(), with);
-  return s;
-}
 
 // Largest relative error |B - B_ref| / |B_ref| of one case at one preset, per distance band
 // (-1 = inside), with the number of triangles its surfaces have.

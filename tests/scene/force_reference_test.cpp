@@ -13,18 +13,12 @@
 #include "magnetics/system.h"
 #include "scene/load.h"
 #include "scene/scene_magnetics.h"
+#include "support/reference_text.h"
 
 namespace magbake::testing {
 namespace {
 
 using magnetics::Vec3;
-
-std::string source_dir() { return MAGBAKE_SOURCE_DIR; }
-
-std::string replace_all(std::string s, const std::string& what, const std::string& with) {
-  for (std::size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + with.size())) s.replace(at, what.size(), with);
-  return s;
-}
 
 Vec3 vec(const nlohmann::json& j) { return Vec3(j[0].get<double>(), j[1].get<double>(), j[2].get<double>()); }
 
