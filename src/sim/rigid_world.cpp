@@ -111,15 +111,14 @@ class ContactWorld : public btDiscreteDynamicsWorld {
     }
   }
 
-  // Contacts of convex hulls (cylinders, mesh pieces) are made afresh in every step: their
-  // manifolds are emptied before collision detection, so the clipped contact face of this step
-  // is all there is. Kept, a persistent manifold's four slots held stale points of the face a
+  // Contacts of cylinders (convex hulls, Impl::cylinder_hull) are made afresh in every step:
+  // their manifolds are emptied before collision detection, so the clipped contact face of this
+  // step is all there is. Kept, a persistent manifold's four slots held stale points of the face a
   // rolling cylinder had left (inside the breaking distance), and a rim that sank elsewhere was
   // seen only when it replaced one of them, 0.1 mm deep (physics.md §8 item 10).
   void performDiscreteCollisionDetection() override {
     auto hull = [](const btCollisionObject* o) {
-      const int t = o->getCollisionShape()->getShapeType();
-      return t == CONVEX_HULL_SHAPE_PROXYTYPE || t == COMPOUND_SHAPE_PROXYTYPE;
+      return o->getCollisionShape()->getShapeType() == CONVEX_HULL_SHAPE_PROXYTYPE;
     };
     for (int k = 0; k < m_dispatcher1->getNumManifolds(); ++k) {
       btPersistentManifold* mf = m_dispatcher1->getManifoldByIndexInternal(k);
@@ -197,9 +196,9 @@ struct RigidWorld::Impl {
     return sh;
   }
 
-  // A convex hull's margin lies outside its vertices (a box's and a btCylinderShape's inside
-  // their sizes): GJK pairs (a sphere on a hull) meet the hull grown by it, SAT-clipped pairs
-  // the vertices themselves. At most 1 um, so that both see the same surface (a steel ball
+  // A cylinder hull's margin lies outside its vertices (a box's and a btCylinderShape's inside
+  // their sizes): GJK pairs (a sphere on the cylinder) meet the hull grown by it, SAT-clipped
+  // pairs the vertices themselves. At most 1 um, so that both see the same surface (a steel ball
   // resting on a cylinder magnet sat 10 um above it with 10 um).
   static double hull_margin(double margin) { return std::min(margin, 1e-6); }
 
@@ -277,8 +276,7 @@ struct RigidWorld::Impl {
       auto* h = new btConvexHullShape();
       for (const Vec3& p : hull) h->addPoint(bt(p), false);
       h->recalcLocalAabb();
-      h->setMargin(hull_margin(margin));
-      h->initializePolyhedralFeatures();
+      h->setMargin(margin);
       own(h);
       btTransform id;
       id.setIdentity();
@@ -314,11 +312,13 @@ RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>
   m.dispatcher.registerCollisionCreateFunc(SPHERE_SHAPE_PROXYTYPE, SPHERE_SHAPE_PROXYTYPE, &m.sphere_sphere);
   m.world->setGravity(bt(scene.gravity));
   m.world->getDispatchInfo().m_deterministicOverlappingPairs = true;
-  // Polyhedral pairs (boxes against hulls, hulls against hulls and triangles) clip their contact
-  // faces along the separating axis found by SAT, not along GJK's normal: with GJK's normal
-  // (computed between margin-shrunk cores) a cylinder lying on a box clipped the wrong facet
-  // while its rim sank 0.15 mm, and the late push-out gained 7-20% of the pair's binding energy
-  // at any dt (physics.md §8 item 10).
+  // Polyhedral pairs (a cylinder against a box, a cylinder or a triangle of a static mesh) clip
+  // their contact faces along the separating axis found by SAT, not along GJK's normal: with
+  // GJK's normal (computed between margin-shrunk cores) a cylinder lying on a box clipped the
+  // wrong facet while its rim sank 0.15 mm, and the late push-out gained 7-20% of the pair's
+  // binding energy at any dt (physics.md §8 item 10). The convex pieces of dynamic meshes have
+  // no polyhedral features and stay with GJK: given them, Bowl2008's iron digits (HACD pieces)
+  // against the bowl's triangles threw 28 bodies out of the scene.
   m.world->getDispatchInfo().m_enableSatConvex = true;
   btContactSolverInfo& si = m.world->getSolverInfo();
   si.m_numIterations = 20;
