@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 #include <limits>
 
 #include "state.h"
@@ -91,7 +92,8 @@ void BodyTreeSources::aggregate(const BodyTree& t, const Model& m, const Sources
   moment.assign(nn, Vec3::Zero());
   active.assign(nn, 0);
   open_radius.assign(nn, 0.0);
-  std::vector<double> abs_sum(nn, 0.0);
+  spread.assign(nn, 0.0);
+  std::vector<double> abs_sum(nn, 0.0), spread_sum(nn, 0.0);  // sum |m_k|, sum q_k |m_k|
   // Children are created after their parents: a reverse sweep sums bottom-up.
   for (int n = nn - 1; n >= 0; --n) {
     if (t.child[n] < 0) {
@@ -100,6 +102,11 @@ void BodyTreeSources::aggregate(const BodyTree& t, const Model& m, const Sources
       active[n] = src.node_active[root];
       abs_sum[n] = moment[n].norm();
       open_radius[n] = t.radius[n];
+      spread[n] = src.spread.empty() ? 0.0 : src.spread[root];
+      // A body whose moments cancel (infinite spread) makes every group holding it open.
+      spread_sum[n] = spread[n] == 0.0 ? 0.0
+                      : std::isinf(spread[n]) ? std::numeric_limits<double>::infinity()
+                                              : spread[n] * abs_sum[n];
     } else {
       const int k = t.child[n];
       moment[n] = moment[k] + moment[k + 1];
@@ -107,6 +114,8 @@ void BodyTreeSources::aggregate(const BodyTree& t, const Model& m, const Sources
       abs_sum[n] = abs_sum[k] + abs_sum[k + 1];
       const double net = moment[n].norm();
       open_radius[n] = net > 0.0 ? t.radius[n] * std::max(1.0, abs_sum[n] / net) : std::numeric_limits<double>::infinity();
+      spread_sum[n] = spread_sum[k] + spread_sum[k + 1];
+      spread[n] = spread_sum[n] == 0.0 ? 0.0 : net > 0.0 ? spread_sum[n] / net : std::numeric_limits<double>::infinity();
     }
   }
 }

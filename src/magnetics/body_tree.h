@@ -57,6 +57,10 @@ struct BodyTreeSources {
   std::vector<Vec3> moment;
   std::vector<std::uint8_t> active;
   std::vector<double> open_radius;
+  /// m: a body's Sources::spread at its root (0 when src has none); for a group, the members'
+  /// spreads weighted by |their moment| / |the group's moment| (infinite when that vanishes),
+  /// a bound on the part of the group's first moment that its open_radius does not cover.
+  std::vector<double> spread;
   /// Sums src.node[root] of each body bottom-up.
   void aggregate(const BodyTree& tree, const Model& model, const Sources& src);
 };

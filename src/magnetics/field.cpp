@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <limits>
 #include <numeric>
 
 #include "body_tree.h"
@@ -18,7 +19,29 @@
 
 namespace magbake::magnetics {
 
+void Sources::aggregate(const Model& m, std::span<const Vec3> cell_offset, std::span<const Vec3> node_offset) {
+  aggregate(m);
+  const int nn = m.node_count();
+  first_moment.assign(nn, Mat3::Zero());
+  spread.assign(nn, 0.0);
+  for (int n = nn - 1; n >= 0; --n) {
+    if (!node_active[n]) continue;
+    Mat3& q = first_moment[n];
+    const int ch = m.node_child[n];
+    if (ch < 0) {
+      for (int c = m.node_begin[n]; c < m.node_end[n]; ++c) q += cell[c] * (cell_offset[c] - node_offset[n]).transpose();
+    } else {
+      for (int k = ch; k < ch + m.node_nchild[n]; ++k) {
+        q += first_moment[k] + node[k] * (node_offset[k] - node_offset[n]).transpose();
+      }
+    }
+    const double net = node[n].norm();
+    spread[n] = net > 0.0 ? q.norm() / net : std::numeric_limits<double>::infinity();
+  }
+}
+
 void Sources::aggregate(const Model& m) {
+  spread.clear();
   node.assign(m.node_count(), Vec3::Zero());
   node_active.assign(m.node_count(), 0);
   // Children are created after their parents, so a reverse sweep sums bottom-up.
@@ -324,11 +347,12 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
       const bool gap = d - bt.radius[y] - rx > opt.near_field * 2.0 * bt.reach[y];
       if (tt.end[x] - tt.begin[x] < kLocalGroups) {
         // Few targets: the aggregate at each of them costs less than an expansion.
-        if (gap && agg.open_radius[y] + rx < theta * d) {
+        if (gap && agg.open_radius[y] + rx < theta * d && spread_ok(agg.spread[y], 0.0, theta, d)) {
           for (int q = tt.begin[x]; q < tt.end[x]; ++q) walk_near[k].emplace_back(tt.order[q], ~y);
           continue;
         }
-      } else if (gap && agg.open_radius[y] < theta * (d - rx) && rx < kLocalTheta * opt.theta * d) {
+      } else if (gap && agg.open_radius[y] < theta * (d - rx) && spread_ok(agg.spread[y], 0.0, theta, d - rx) &&
+                 rx < kLocalTheta * opt.theta * d) {
         // The aggregate's error at the nearest target as above; the expansion's own ~10 (rx/d)^3.
         locals[k].emplace_back(x, y);
         continue;
@@ -395,7 +419,8 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
           const double dn = (origin + s.node_offset[n] - gc).norm();
           const double rn = m.node_radius[n];
           if ((nexcl == 0 || m.node_part[n] >= 0) && rn + gr < opt.theta * dn &&
-              dn - rn - gr > opt.near_field * 2.0 * m.node_reach[n]) {
+              dn - rn - gr > opt.near_field * 2.0 * m.node_reach[n] &&
+              (src.spread.empty() || spread_ok(src.spread[n], 0.0, opt.theta, dn))) {
             far[k].push_back({FieldPlan::kCellNode, n});  // the node acts as one dipole at its centre
             continue;
           }

@@ -280,7 +280,8 @@ void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result&
     const bool leaves = ta.child[x] < 0 && tb.child[y] < 0;
     const double theta = leaves ? st.theta : st.body_groups ? kGroupTheta * st.theta : 0.0;
     if (well_separated(d, ta.radius[x], tb.radius[y], A.total.open_radius[x], B.total.open_radius[y], theta,
-                       st.near_field, ta.reach[x] + tb.reach[y])) {
+                       st.near_field, ta.reach[x] + tb.reach[y]) &&
+        spread_ok(A.total.spread[x], B.total.spread[y], theta, d)) {
       Vec3 field;
       Mat3 grad;
       dipole_field_gradient(r, B.total.moment[y], field, grad);
@@ -427,7 +428,9 @@ void body_forces(const Model& m, const Settings& st, const State& s, const BodyT
         const double ra = m.node_radius[na], rb = m.node_radius[nb];
         const double gap = d - ra - rb;  // lower bound on (centre distance - reaches) of any cell pair
         const double near_margin = st.near_field * (m.node_reach[na] + m.node_reach[nb]);
-        if (!mixed && ra + rb < st.theta * d && gap > near_margin) {
+        // Far: small enough seen from each other, and moments that act as one dipole each.
+        if (!mixed && ra + rb < st.theta * d && gap > near_margin &&
+            (s.total.spread.empty() || spread_ok(s.total.spread[na], s.total.spread[nb], st.theta, d))) {
           list.push_back({p, na, nb, kFar, wid});
           continue;
         }

@@ -38,7 +38,7 @@ void update_geometry(const Model& m, State& s) {
   });
   for (int n = 0; n < m.node_count(); ++n) s.node_offset[n] = s.body_rotation[m.node_body[n]] * m.node_center[n];
   s.body_tree.build(m, s);
-  s.permanent.aggregate(m);
+  s.permanent.aggregate(m, s.cell_offset, s.node_offset);
 }
 }  // namespace
 
@@ -51,7 +51,7 @@ void place(const Model& m, State& s, const std::vector<Vec3>& induced) {
     s.induced_moment = induced;
     for (std::size_t q = 0; q < m.induced_cells.size(); ++q) s.total.cell[m.induced_cells[q]] += induced[q];
   }
-  s.total.aggregate(m);
+  s.total.aggregate(m, s.cell_offset, s.node_offset);
 }
 
 void evaluate(const Model& m, const Settings& st, State& s, Result& res) {
@@ -82,7 +82,7 @@ void evaluate(const Model& m, const Settings& st, State& s, Result& res) {
     res.energy += res.induction.energy;
     for (std::size_t q = 0; q < m.induced_cells.size(); ++q) s.total.cell[m.induced_cells[q]] += s.induced_moment[q];
   }
-  s.total.aggregate(m);
+  s.total.aggregate(m, s.cell_offset, s.node_offset);
 
   // 3. Single-precision copies for the block kernels.
   parallel_for_each(m.cell_count(), 4096, [&](int c) {

@@ -236,5 +236,42 @@ TEST(FixedPairs, AreComputedOncePerPoseAndMatchTheFullWalk) {
   check("a fixed body moved", true);
 }
 
+// A magnet of two halves magnetized in opposite directions has no net moment: its field is a
+// quadrupole's. Its root node passes the radius test at 40 mm, but its spread (state.h) is
+// infinite, so every walk opens it down to the uniform halves (spread zero to round-off). At
+// theta 0.5 the force on a small magnet nearby is then that of theta 0 to the aggregates'
+// second-order error; taken as its zero sum, it was zero.
+TEST(BodyTree, NodesWhoseMomentsCancelAreOpened) {
+  Rig s;
+  magnetics::BodySpec split;
+  for (int half : {-1, 1}) {
+    s.shapes.push_back(std::make_unique<geometry::BoxShape>(Vec3(0.01, 0.01, 0.005)));
+    split.parts.push_back({s.shapes.back().get(), Pose{Quat::Identity(), Vec3(0, 0, 0.0025 * half)},
+                           permanent(1.3, Vec3(0, 0, half))});
+  }
+  s.bodies.push_back(std::move(split));
+  s.add(std::make_unique<geometry::BoxShape>(Vec3(0.005, 0.005, 0.005)), permanent(1.3, Vec3::UnitX()));
+  s.build(0.001);
+  s.state.body_pose[1].position = Vec3(0.04, 0.003, 0.006);
+  Settings st;  // theta 0.5
+  Result r;
+  evaluate(s.model, st, s.state, r);
+  Settings exact = st;
+  exact.theta = 0.0;
+  Result ref;
+  evaluate(s.model, exact, s.state, ref);
+  const double split_root = s.state.total.spread[s.model.body_root[0]];
+  EXPECT_TRUE(std::isinf(split_root) || split_root > 1.0) << split_root;
+  for (int n = 0; n < s.model.node_count(); ++n) {
+    if (s.model.node_part[n] >= 0) {
+      EXPECT_LT(s.state.total.spread[n], 1e-12) << "uniform node " << n;
+    }
+  }
+  ASSERT_GT(ref.force[1].norm(), 0.0);
+  EXPECT_LT((r.force[1] - ref.force[1]).norm(), 0.01 * ref.force[1].norm())
+      << r.force[1].transpose() << " vs " << ref.force[1].transpose();
+  EXPECT_LT((r.torque[1] - ref.torque[1]).norm(), 0.01 * ref.torque[1].norm());
+}
+
 }  // namespace
 }  // namespace magbake::testing
