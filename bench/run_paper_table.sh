@@ -49,7 +49,7 @@ scenes=(
 {
   echo "== run of parts=$parts"
   echo "date: $(date -u +%Y-%m-%dT%H:%MZ)"
-  echo "commit: $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$root" diff --quiet 2>/dev/null || echo ' (with uncommitted changes)')"
+  echo "commit: $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$root" diff --quiet -- . ":!bench/results" 2>/dev/null || echo ' (with uncommitted changes)')"
   echo "cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores"
   echo "memory: $(free -g | awk '/Mem:/{print $2}') GiB"
   echo "compiler: $(c++ --version | head -1)"
