@@ -121,6 +121,14 @@ bool SurfaceMesh::build(const Vec3* vertex, const double* sigma, int ntri, const
     if (inserted) group_weight.push_back(sigma[t] * normal[t]);
     group[t] = it->second;
   }
+  group_charged.assign(group_weight.size(), 1);
+  for (std::size_t g = 0; g < group_weight.size(); ++g) {
+    // Exactly zero only: a group whose charge is zero up to rounding keeps its share.
+    if (group_weight[g] != Vec3::Zero()) continue;
+    group_charged[g] = 0;
+  }
+  bounds = Box3();
+  for (const Vec3& p : point) bounds.extend(p);
   group_begin.assign(group_weight.size() + 1, 0);
   for (int t = 0; t < ntri; ++t) ++group_begin[group[t] + 1];
   for (std::size_t g = 0; g < group_weight.size(); ++g) group_begin[g + 1] += group_begin[g];
@@ -178,7 +186,10 @@ Vec3 surface_field(const SurfaceMesh& sm, const Vec3& x, std::vector<double>& d,
     }
   }
   double angle = 0;
+  // Outside the corners' box x cannot be inside: uncharged groups are then skipped.
+  const bool maybe_inside = sm.bounds.contains(x);
   for (std::size_t g = 0; g + 1 < sm.group_begin.size(); ++g) {
+    if (!maybe_inside && !sm.group_charged[g]) continue;
     // Half solid angles add: multiply (den + i num) of the group's triangles, kept at unit scale.
     double X = 1, Y = 0;
     for (int f = sm.group_begin[g]; f < sm.group_begin[g + 1]; ++f) {
@@ -194,7 +205,7 @@ Vec3 surface_field(const SurfaceMesh& sm, const Vec3& x, std::vector<double>& d,
     const double nE = -2.0 * std::atan2(Y, X);
     H += nE * sm.group_weight[g];
     angle += nE;
-    if constexpr (kGradient) {
+    if (kGradient && sm.group_charged[g]) {
       // grad of the solid angle = sum over the boundary of the line integral of
       // dl x (x - y)/|x - y|^3 (the field of a unit current loop); n . E is minus the solid angle.
       Vec3 grad = Vec3::Zero();
@@ -222,7 +233,7 @@ Vec3 surface_field(const SurfaceMesh& sm, const Vec3& x, std::vector<double>& d,
     }
   }
   H /= 4.0 * std::numbers::pi;
-  if (angle < -2.0 * std::numbers::pi - 1e-9) H += sm.magnetization;
+  if (maybe_inside && angle < -2.0 * std::numbers::pi - 1e-9) H += sm.magnetization;
   if constexpr (kGradient) *G = (kMu0 / (4.0 * std::numbers::pi)) * J;
   return kMu0 * H;
 }

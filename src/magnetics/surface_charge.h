@@ -6,6 +6,8 @@
 // right down to its surface and inside it, where its cells' point dipoles are far off.
 #pragma once
 
+#include <cstdint>
+
 #include <vector>
 
 #include "types.h"
@@ -46,6 +48,11 @@ struct SurfaceMesh {
   std::vector<Eigen::Vector3i> face;        ///< corners, counter-clockwise seen from outside, by group
   std::vector<int> group_begin;             ///< (ngroup + 1) faces of group g: [begin[g], begin[g+1])
   std::vector<Vec3> group_weight;           ///< sigma n of the group's faces, A/m
+  /// (ngroup) 1 for a group that carries charge. An uncharged group (weight exactly zero: the
+  /// side of a cylinder magnetized along its axis) adds nothing to B or G; its solid angle only
+  /// tells whether x is inside, so it is skipped for points outside `bounds`.
+  std::vector<std::uint8_t> group_charged;
+  Box3 bounds;                              ///< of the corners, m
   /// Boundary of each group, for the gradient: the directed edges (a -> b, counter-clockwise
   /// seen from outside) of its faces that no other face of the group runs the other way;
   /// group g's are [loop_begin[g], loop_begin[g+1]).
