@@ -24,9 +24,10 @@ struct CostEstimate {
 };
 
 /// Runs the first nominal steps of `scene` (at most `max_steps`, and stops after the step that
-/// takes the trial past `budget_seconds` of wall time) and scales what they cost to the whole
-/// shot. `model` must be built from `scene`. The trial sees the shot's beginning only: a scene
-/// whose cost changes later (magnets that snap after the trial) is estimated from its start.
+/// takes the trial past `budget_seconds` of wall time) and adds, for the rest of the shot, what
+/// the trial's second half cost per step. `model` must be built from `scene`. The trial sees the
+/// shot's beginning only: a scene whose cost changes later (magnets that snap after the trial)
+/// is estimated from its start.
 CostEstimate estimate_cost(const scene::Scene& scene, const magnetics::Model& model, double budget_seconds,
                            int max_steps);
 

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <tuple>
@@ -628,23 +629,51 @@ RigidWorld::Penetration RigidWorld::deepest_penetration() const {
   return out;
 }
 
-void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out) const {
+void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out, std::vector<double>* face_slip) const {
   const Impl& m = *impl_;
   out.resize(m.scene.bodies.size());
   for (auto& n : out) n.clear();
+  if (face_slip) face_slip->assign(m.scene.bodies.size(), 0.0);
   btCollisionDispatcher& d = const_cast<btCollisionDispatcher&>(m.dispatcher);
   for (int k = 0; k < d.getNumManifolds(); ++k) {
     const btPersistentManifold* mf = d.getManifoldByIndexInternal(k);
     const int a = mf->getBody0()->getUserIndex(), b = mf->getBody1()->getUserIndex();
-    for (int c = 0; c < mf->getNumContacts(); ++c) {
+    Vec3 p[4];
+    double slip = 0;  // largest speed of B's contact point relative to A's, m/s
+    int touching = 0;
+    for (int c = 0; c < mf->getNumContacts() && touching < 4; ++c) {
       const btManifoldPoint& pt = mf->getContactPoint(c);
       if (pt.getDistance() >= 1e-4) continue;
+      const btVector3& w = pt.getPositionWorldOnB();
+      p[touching] = Vec3(w.x(), w.y(), w.z());
+      if (face_slip) {
+        const btRigidBody* ra = btRigidBody::upcast(mf->getBody0());
+        const btRigidBody* rb = btRigidBody::upcast(mf->getBody1());
+        btVector3 v(0, 0, 0);
+        if (ra) v -= ra->getVelocityInLocalPoint(w - ra->getCenterOfMassPosition());
+        if (rb) v += rb->getVelocityInLocalPoint(w - rb->getCenterOfMassPosition());
+        slip = std::max(slip, static_cast<double>(v.length()));
+      }
+      if (touching++ > 0) continue;  // one normal per manifold: its points share it
       // Bullet's normal on B points towards A: it pushes A away from B, and B the other way.
       const Vec3 n(pt.m_normalWorldOnB.x(), pt.m_normalWorldOnB.y(), pt.m_normalWorldOnB.z());
       if (a >= 0) out[a].push_back(n);
       if (b >= 0) out[b].push_back(-n);
-      break;  // one normal per manifold: its points share it
     }
+    if (!face_slip || touching == 0) continue;
+    // A face contact: three of its points span a triangle of at least half the square of a tenth
+    // of the smaller body's smallest extent. A persistent manifold of a rolling ball keeps stale
+    // points close together, which do not count. Anything else is a point or line contact.
+    double size = std::numeric_limits<double>::infinity();
+    if (a >= 0) size = std::min(size, m.extent[a]);
+    if (b >= 0) size = std::min(size, m.extent[b]);
+    double area2 = 0;  // twice the largest triangle's area, m²
+    for (int i = 0; i < touching; ++i)
+      for (int j = i + 1; j < touching; ++j)
+        for (int q = j + 1; q < touching; ++q) area2 = std::max(area2, (p[j] - p[i]).cross(p[q] - p[i]).norm());
+    if (area2 < 0.01 * size * size) slip = std::numeric_limits<double>::infinity();
+    if (a >= 0) (*face_slip)[a] = std::max((*face_slip)[a], slip);
+    if (b >= 0) (*face_slip)[b] = std::max((*face_slip)[b], slip);
   }
 }
 

@@ -65,7 +65,12 @@ class RigidWorld {
   /// Contact normals of the last step's collision detection, per scene body: for every manifold
   /// with a point closer than 0.1 mm, the unit normal (world frame) along which the contact
   /// pushes that body away from its partner. Bodies without such a contact get an empty list.
-  void contact_normals(std::vector<std::vector<Vec3>>& out) const;
+  /// `face_slip` (optional, per body, m/s): over the body's manifolds with such points, the
+  /// largest speed of one body's contact point relative to the other's; infinite when one of
+  /// them is not a face contact (no three of its points within 0.1 mm span a triangle of area
+  /// 0.005 s², s the smaller body's smallest extent), i.e. a point or line contact about which
+  /// the body can roll or rock freely; 0 without contacts.
+  void contact_normals(std::vector<std::vector<Vec3>>& out, std::vector<double>* face_slip = nullptr) const;
   /// Moves dynamic bodies apart along their contact normals until no pair penetrates deeper
   /// than `tolerance` (m). Positions only: velocities are kept, so no kinetic energy is added.
   /// Returns the pairs that overlapped by more than `tolerance` before, deepest first.

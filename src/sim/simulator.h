@@ -33,7 +33,8 @@ class NumericalFault : public std::runtime_error {
 /// Advances a scene frame by frame. Each substep (physics-notes, bullet-notes):
 ///  1. magnetics at the current poses -> force and torque on every body (about its COM);
 ///  2. the substep is split when the magnetic stiffness would make it unstable
-///     (h sqrt(k/m) > 0.5 with k = 4|F|/l, l = a quarter of the body's smallest extent) or when
+///     (h sqrt(k/m) > 0.5 with k = 4|F|/l, l = a quarter of the body's smallest extent, and
+///     the pull into a face contact counted at 0.75|F|/l, kPressedStiffness) or when
 ///     two bodies about to touch close by more than 1% of their size per piece; the split is
 ///     re-decided after every piece. It is decided per island (RigidWorld::islands(): bodies
 ///     that may touch within the step): islands that need no split take the substep in one
@@ -70,6 +71,12 @@ class Simulator {
   const std::vector<RigidWorld::Penetration>& initial_overlaps() const { return initial_overlaps_; }
   /// Penetration (m) above which initial overlaps are reported and separated.
   static constexpr double kOverlapTolerance = 1e-4;
+  /// Stiffness that the part of a body's magnetic pull pressing it into a face contact adds to
+  /// the force guard, in units of |F_pressed| / l (l = a quarter of the body's smallest extent):
+  /// 0.75 |F| / l = 3 |F| / a, the shear stiffness measured for touching cube magnets
+  /// (physics.md §8; the rest of the force counts 4 |F| / l, as does the whole force of a body
+  /// in a point or line contact). Soft spheres leave it out.
+  static constexpr double kPressedStiffness = 0.75;
 
   /// A callback that may change the state after every magnetics evaluation, before the state is
   /// checked for non-finite values and stepped; `frame` is the frame being computed. A test
@@ -80,8 +87,7 @@ class Simulator {
  private:
   void evaluate_magnetics(FrameDiagnostics& d);
   /// Gathers the contact normals of Bullet's last collision detection into contact_normals_
-  /// (once per step; read by update_sleep and substep_split) when sleeping or a contact-exempt
-  /// body needs them.
+  /// (once per step; read by update_sleep and body_splits).
   void refresh_contacts();
   /// Sleeping, after a magnetics evaluation: a sleeping body whose magnetic force or torque has
   /// changed from the one it fell asleep with (by wake_force_/wake_torque_) is woken; a body
@@ -115,9 +121,9 @@ class Simulator {
   std::vector<int> island_;               // per body: RigidWorld::islands
   std::vector<std::uint8_t> fast_, held_; // per body: split_islands()
   bool holding_ = false;                  // held_ bodies are fixed in the magnetics now
-  std::vector<std::uint8_t> contact_exempt_;  // per body: dynamic and without magnetic torque (substep_split)
-  bool any_contact_exempt_ = false;
+  std::vector<std::uint8_t> contact_exempt_;  // per body: dynamic and without magnetic torque (body_splits)
   std::vector<std::vector<Vec3>> contact_normals_;  // per body, of the last step (refresh_contacts())
+  std::vector<double> face_slip_;         // per body: RigidWorld::contact_normals' face_slip, m/s
   std::vector<RigidWorld::Penetration> initial_overlaps_;
   bool sleep_ = false;                    // Scene::sleep_time > 0
   std::vector<double> wake_force_;        // per body, N: force change that wakes it

@@ -270,6 +270,35 @@ TEST(Contact, SteelBallRestingOnAMagnetNeedsNoSubsteps) {
   EXPECT_GT(snap_substeps, 50);
 }
 
+// Two cube magnets resting face to face on a table, dt 1 ms (issue 11, outcome 2; physics.md §8,
+// the force guard): the pull that presses each into the face contact counts at the pair's
+// measured shear stiffness (0.75 |F| / l), not at 4 |F| / l, so the pair takes 3 pieces per
+// substep instead of 7, and stays where it is without gaining energy.
+TEST(Contact, CubesRestingFaceToFaceTakeFewPieces) {
+  std::string s = snap_scene(1e-3, true, 30);
+  for (const char* from : {"position: [-10, 0, 5]", "position: [10, 0, 5]"}) {
+    const std::size_t at = s.find(from);
+    ASSERT_NE(at, std::string::npos);
+    s.replace(at, std::string(from).size(), from[11] == '-' ? "position: [-5.001, 0, 5.001]" : "position: [5.001, 0, 5.001]");
+  }
+  Bake r(s);
+  const Vec3 a0 = r.sim->state().com_position[1], b0 = r.sim->state().com_position[2];
+  int substeps = 0, nominal = 0;
+  double lowest = 1e300, worst_rise = 0;
+  for (int f = 0; f < 30; ++f) {
+    const FrameDiagnostics d = r.sim->advance_frame();
+    substeps += d.substeps, nominal += r.scene.steps_per_frame();
+    lowest = std::min(lowest, d.total_energy());
+    worst_rise = std::max(worst_rise, d.total_energy() - lowest);
+  }
+  const double moved = std::max((r.sim->state().com_position[1] - a0).norm(), (r.sim->state().com_position[2] - b0).norm());
+  std::printf("cubes resting face to face: %d Bullet steps for %d nominal (%.2f per substep), moved %.4f mm, "
+              "energy rise %.2e J\n", substeps, nominal, double(substeps) / nominal, 1e3 * moved, worst_rise);
+  EXPECT_LE(substeps, 3 * nominal + 1);  // 7 per substep with the whole pull counted
+  EXPECT_LT(moved, 5e-5);
+  EXPECT_LT(worst_rise, 1e-4);  // of a binding energy of 0.16 J
+}
+
 // Per-island substeps (issue 11, outcome 2; physics.md §8): two cube magnets snapping on a table
 // need short pieces; six wooden blocks resting on the same table 6-10 cm away, and a lone magnet
 // 12 cm away, do not, and are not refined with them. The snapping pair moves exactly as it does
