@@ -259,6 +259,39 @@ struct TreeSide {
   }
 };
 
+// Field and gradient sums per tree node of one side (one task's share, or the sides' own).
+struct NodeSums {
+  std::vector<Vec3> b;
+  std::vector<Mat3> g;
+  std::vector<std::uint8_t> has;
+  void reset(int n) {
+    b.assign(n, Vec3::Zero());
+    g.assign(n, Mat3::Zero());
+    has.assign(n, 0);
+  }
+};
+
+// What one part of the walk adds: node sums on each side, energy, node-pair count, the body
+// pairs left for the cell walk (in the walk's order).
+struct WalkSink {
+  WalkSink() = default;
+  WalkSink(Vec3* ba, Mat3* ga, std::uint8_t* ha, Vec3* bb, Mat3* gb, std::uint8_t* hb)
+      : b_a(ba), g_a(ga), has_a(ha), b_b(bb), g_b(gb), has_b(hb) {}
+  Vec3* b_a = nullptr;
+  Mat3* g_a = nullptr;
+  std::uint8_t* has_a = nullptr;
+  Vec3* b_b = nullptr;
+  Mat3* g_b = nullptr;
+  std::uint8_t* has_b = nullptr;
+  double energy = 0;
+  std::int64_t node_pairs = 0;
+  std::vector<std::pair<int, int>> pairs;
+};
+
+// Number of subtrees of the body-tree walk handed to parallel tasks. Fixed (not the thread
+// count), so the split, and with it every sum's order, is the same for any number of threads.
+constexpr std::size_t kWalkTasks = 16;
+
 // Walks tree A against tree B (A against itself when `same`). Groups of bodies that are well
 // separated interact as the dipole pair of their summed moments at their centres: each member
 // gets the force and torque its own moment would feel at its group's centre (the pair
@@ -267,22 +300,24 @@ struct TreeSide {
 // momentum are conserved to round-off, and the error is of order theta like any aggregate).
 // The field and gradient a group feels are summed per tree node (hand_down() passes them to the
 // members). Body pairs that are not well separated are appended to `pairs` for the cell walk.
+// The walk is depth-first; once kWalkTasks node pairs are pending, each pending pair's subtree
+// of the walk is a task that sums into its own NodeSums, added to the sides' in the walk's
+// order afterwards (the body pairs come out in the serial walk's order).
 void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result& res,
                 std::vector<std::pair<int, int>>& pairs) {
   const BodyTree &ta = A.tree, &tb = B.tree;
   if (ta.empty() || tb.empty()) return;
-  std::vector<std::pair<int, int>> stack{{0, 0}};
-  while (!stack.empty()) {
-    const auto [x, y] = stack.back();
-    stack.pop_back();
-    if (!A.total.active[x] || !B.total.active[y]) continue;
+  // One node pair: a far pair goes to the sink, a near leaf pair to its body pairs, the rest is
+  // split onto the stack.
+  auto visit = [&](int x, int y, std::vector<std::pair<int, int>>& stack, WalkSink& sink) {
+    if (!A.total.active[x] || !B.total.active[y]) return;
     if (same && x == y) {
       const int c = ta.child[x];
-      if (c < 0) continue;
+      if (c < 0) return;
       stack.emplace_back(c + 1, c + 1);
       stack.emplace_back(c, c + 1);
       stack.emplace_back(c, c);
-      continue;
+      return;
     }
     const Vec3 r = ta.center[x] - tb.center[y];
     const double d = r.norm();
@@ -297,16 +332,16 @@ void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result&
       Vec3 field;
       Mat3 grad;
       dipole_field_gradient(r, B.total.moment[y], field, grad);
-      A.local_b[x] += field, A.local_g[x] += grad, A.has_local[x] = 1;
+      sink.b_a[x] += field, sink.g_a[x] += grad, sink.has_a[x] = 1;
       dipole_field_gradient(-r, A.total.moment[x], field, grad);
-      B.local_b[y] += field, B.local_g[y] += grad, B.has_local[y] = 1;
-      res.energy -= A.permanent.moment[x].dot(dipole_field(r, B.permanent.moment[y]));
-      ++res.stats.node_pairs;
-      continue;
+      sink.b_b[y] += field, sink.g_b[y] += grad, sink.has_b[y] = 1;
+      sink.energy -= A.permanent.moment[x].dot(dipole_field(r, B.permanent.moment[y]));
+      ++sink.node_pairs;
+      return;
     }
     const int cx = ta.child[x], cy = tb.child[y];
     if (cx < 0 && cy < 0) {
-      pairs.emplace_back(std::min(ta.body[x], tb.body[y]), std::max(ta.body[x], tb.body[y]));
+      sink.pairs.emplace_back(std::min(ta.body[x], tb.body[y]), std::max(ta.body[x], tb.body[y]));
     } else if (cy < 0 || (cx >= 0 && ta.radius[x] >= tb.radius[y])) {
       stack.emplace_back(cx + 1, y);
       stack.emplace_back(cx, y);
@@ -314,6 +349,52 @@ void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result&
       stack.emplace_back(x, cy + 1);
       stack.emplace_back(x, cy);
     }
+  };
+  auto finish = [&](WalkSink& sink) {
+    res.energy += sink.energy;
+    res.stats.node_pairs += sink.node_pairs;
+    pairs.insert(pairs.end(), sink.pairs.begin(), sink.pairs.end());
+  };
+  // The top of the walk, serially into the sides' own sums.
+  std::vector<std::pair<int, int>> stack{{0, 0}};
+  {
+    WalkSink top(A.local_b.data(), A.local_g.data(), A.has_local.data(), B.local_b.data(), B.local_g.data(),
+                 B.has_local.data());
+    while (!stack.empty() && stack.size() < kWalkTasks) {
+      const auto [x, y] = stack.back();
+      stack.pop_back();
+      visit(x, y, stack, top);
+    }
+    finish(top);
+  }
+  if (stack.empty()) return;
+  // The pending pairs' subtrees, the top of the stack first (the serial walk's order).
+  const int ntask = static_cast<int>(stack.size());
+  const int na = ta.node_count(), nb = tb.node_count();
+  std::vector<NodeSums> sa(ntask), sb(same ? 0 : ntask);
+  std::vector<WalkSink> sinks(ntask);
+  parallel_for_each(ntask, 1, [&](int k) {
+    sa[k].reset(na);
+    NodeSums& other = same ? sa[k] : sb[k];
+    if (!same) other.reset(nb);
+    sinks[k] = WalkSink(sa[k].b.data(), sa[k].g.data(), sa[k].has.data(), other.b.data(), other.g.data(), other.has.data());
+    std::vector<std::pair<int, int>> local{stack[ntask - 1 - k]};
+    while (!local.empty()) {
+      const auto [x, y] = local.back();
+      local.pop_back();
+      visit(x, y, local, sinks[k]);
+    }
+  });
+  auto add = [](TreeSide& side, const NodeSums& part) {
+    for (std::size_t n = 0; n < part.has.size(); ++n) {
+      if (!part.has[n]) continue;
+      side.local_b[n] += part.b[n], side.local_g[n] += part.g[n], side.has_local[n] = 1;
+    }
+  };
+  for (int k = 0; k < ntask; ++k) {
+    add(A, sa[k]);
+    if (!same) add(B, sb[k]);
+    finish(sinks[k]);
   }
 }
 

@@ -218,7 +218,8 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
   stats.field_pairs += apply_field_plan(pplan, m, s, s.permanent, t, popt, B);
   Vector b(3 * n);
   std::vector<Vec3> B0(n);  // field of the fixed sources at each target
-  for (int g = 0; g + 1 < static_cast<int>(t.group_begin.size()); ++g) {
+  // Per target group in parallel: each writes only its own targets' B0 and b.
+  parallel_for_each(static_cast<int>(t.group_begin.size()) - 1, 4, [&](int g) {
     const auto s0 = pplan.surface.begin() + pplan.surface_begin[g], s1 = pplan.surface.begin() + pplan.surface_end[g];
     for (int q = t.group_begin[g]; q < t.group_begin[g + 1]; ++q) {
       Vec3 Bq = B[q] + st.external_field;
@@ -227,12 +228,9 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
         Bq += rows.tensor[e] * s.permanent.cell[rows.cell[e]];
       }
       B0[q] = Bq;
+      b.segment<3>(3 * q) = alpha[q] * Bq;
     }
-  }
-  for (int q = 0; q < n; ++q) {
-    const Vec3 Bq = B0[q];
-    b.segment<3>(3 * q) = alpha[q] * Bq;
-  }
+  });
 
   auto store = [&](const Vector& x) {
     s.induced_moment.resize(m.induced_cells.size());
@@ -269,11 +267,11 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
     load(x);
     stats.field_pairs += apply_field_plan(plan, m, s, s.induced, t, fopt, B);
     y.resize(3 * n);
-    for (int q = 0; q < n; ++q) {
+    parallel_for_each(n, 256, [&](int q) {  // each target writes only its own rows of y
       Vec3 Bq = B[q];
       for (int e = rows.begin[q]; e < rows.begin[q + 1]; ++e) Bq += rows.tensor[e] * s.induced.cell[rows.cell[e]];
       y.segment<3>(3 * q) = x.segment<3>(3 * q) - alpha[q] * Bq;
-    }
+    });
   };
 
   // Right preconditioner z = M^-1 v: each factored block (one body's consecutive induced cells,
