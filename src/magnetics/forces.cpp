@@ -244,21 +244,6 @@ double permanent_pair_energy(const Model& m, const State& s, int ba, int bb, con
 
 // One side of a walk between hierarchies over bodies: the tree, its moment sums, and the field
 // and gradient its nodes feel from far groups of the other side.
-struct TreeSide {
-  const BodyTree& tree;
-  BodyTreeSources total, permanent;
-  std::vector<Vec3> local_b;
-  std::vector<Mat3> local_g;
-  std::vector<std::uint8_t> has_local;
-  TreeSide(const BodyTree& t, const Model& m, const State& s) : tree(t) {
-    total.aggregate(t, m, s.total);
-    permanent.aggregate(t, m, s.permanent);
-    local_b.assign(t.node_count(), Vec3::Zero());
-    local_g.assign(t.node_count(), Mat3::Zero());
-    has_local.assign(t.node_count(), 0);
-  }
-};
-
 // Field and gradient sums per tree node of one side (one task's share, or the sides' own).
 struct NodeSums {
   std::vector<Vec3> b;
@@ -271,18 +256,22 @@ struct NodeSums {
   }
 };
 
+struct TreeSide {
+  const BodyTree& tree;
+  BodyTreeSources total, permanent;
+  NodeSums local;  // field and gradient of the far groups, per node
+  TreeSide(const BodyTree& t, const Model& m, const State& s) : tree(t) {
+    total.aggregate(t, m, s.total);
+    permanent.aggregate(t, m, s.permanent);
+    local.reset(t.node_count());
+  }
+};
+
 // What one part of the walk adds: node sums on each side, energy, node-pair count, the body
 // pairs left for the cell walk (in the walk's order).
 struct WalkSink {
-  WalkSink() = default;
-  WalkSink(Vec3* ba, Mat3* ga, std::uint8_t* ha, Vec3* bb, Mat3* gb, std::uint8_t* hb)
-      : b_a(ba), g_a(ga), has_a(ha), b_b(bb), g_b(gb), has_b(hb) {}
-  Vec3* b_a = nullptr;
-  Mat3* g_a = nullptr;
-  std::uint8_t* has_a = nullptr;
-  Vec3* b_b = nullptr;
-  Mat3* g_b = nullptr;
-  std::uint8_t* has_b = nullptr;
+  NodeSums* a = nullptr;  // tree A's side
+  NodeSums* b = nullptr;  // tree B's side (the same object when A is B)
   double energy = 0;
   std::int64_t node_pairs = 0;
   std::vector<std::pair<int, int>> pairs;
@@ -332,9 +321,9 @@ void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result&
       Vec3 field;
       Mat3 grad;
       dipole_field_gradient(r, B.total.moment[y], field, grad);
-      sink.b_a[x] += field, sink.g_a[x] += grad, sink.has_a[x] = 1;
+      sink.a->b[x] += field, sink.a->g[x] += grad, sink.a->has[x] = 1;
       dipole_field_gradient(-r, A.total.moment[x], field, grad);
-      sink.b_b[y] += field, sink.g_b[y] += grad, sink.has_b[y] = 1;
+      sink.b->b[y] += field, sink.b->g[y] += grad, sink.b->has[y] = 1;
       sink.energy -= A.permanent.moment[x].dot(dipole_field(r, B.permanent.moment[y]));
       ++sink.node_pairs;
       return;
@@ -358,8 +347,8 @@ void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result&
   // The top of the walk, serially into the sides' own sums.
   std::vector<std::pair<int, int>> stack{{0, 0}};
   {
-    WalkSink top(A.local_b.data(), A.local_g.data(), A.has_local.data(), B.local_b.data(), B.local_g.data(),
-                 B.has_local.data());
+    WalkSink top;
+    top.a = &A.local, top.b = &B.local;
     while (!stack.empty() && stack.size() < kWalkTasks) {
       const auto [x, y] = stack.back();
       stack.pop_back();
@@ -375,9 +364,8 @@ void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result&
   std::vector<WalkSink> sinks(ntask);
   parallel_for_each(ntask, 1, [&](int k) {
     sa[k].reset(na);
-    NodeSums& other = same ? sa[k] : sb[k];
-    if (!same) other.reset(nb);
-    sinks[k] = WalkSink(sa[k].b.data(), sa[k].g.data(), sa[k].has.data(), other.b.data(), other.g.data(), other.has.data());
+    if (!same) sb[k].reset(nb);
+    sinks[k].a = &sa[k], sinks[k].b = same ? &sa[k] : &sb[k];
     std::vector<std::pair<int, int>> local{stack[ntask - 1 - k]};
     while (!local.empty()) {
       const auto [x, y] = local.back();
@@ -388,7 +376,7 @@ void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result&
   auto add = [](TreeSide& side, const NodeSums& part) {
     for (std::size_t n = 0; n < part.has.size(); ++n) {
       if (!part.has[n]) continue;
-      side.local_b[n] += part.b[n], side.local_g[n] += part.g[n], side.has_local[n] = 1;
+      side.local.b[n] += part.b[n], side.local.g[n] += part.g[n], side.local.has[n] = 1;
     }
   };
   for (int k = 0; k < ntask; ++k) {
@@ -407,10 +395,10 @@ void hand_down(const TreeSide& side, const Model& m, const State& s, Result& res
     const Vec3 mb = s.total.node[m.body_root[b]];
     const Vec3 origin = s.body_pose[b].position;
     for (int n = t.leaf_of[b]; n >= 0; n = t.parent[n]) {
-      if (!side.has_local[n]) continue;
-      const Vec3 F = side.local_g[n].transpose() * mb;
+      if (!side.local.has[n]) continue;
+      const Vec3 F = side.local.g[n].transpose() * mb;
       res.force[b] += F;
-      res.torque[b] += mb.cross(side.local_b[n]) + (t.center[n] - origin).cross(F);
+      res.torque[b] += mb.cross(side.local.b[n]) + (t.center[n] - origin).cross(F);
     }
   }
 }

@@ -638,6 +638,8 @@ void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out, std::vecto
   for (int k = 0; k < d.getNumManifolds(); ++k) {
     const btPersistentManifold* mf = d.getManifoldByIndexInternal(k);
     const int a = mf->getBody0()->getUserIndex(), b = mf->getBody1()->getUserIndex();
+    const btRigidBody* ra = btRigidBody::upcast(mf->getBody0());
+    const btRigidBody* rb = btRigidBody::upcast(mf->getBody1());
     Vec3 p[4];
     double slip = 0;  // largest speed of B's contact point relative to A's, m/s
     int touching = 0;
@@ -647,8 +649,6 @@ void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out, std::vecto
       const btVector3& w = pt.getPositionWorldOnB();
       p[touching] = Vec3(w.x(), w.y(), w.z());
       if (face_slip) {
-        const btRigidBody* ra = btRigidBody::upcast(mf->getBody0());
-        const btRigidBody* rb = btRigidBody::upcast(mf->getBody1());
         btVector3 v(0, 0, 0);
         if (ra) v -= ra->getVelocityInLocalPoint(w - ra->getCenterOfMassPosition());
         if (rb) v += rb->getVelocityInLocalPoint(w - rb->getCenterOfMassPosition());

@@ -154,17 +154,17 @@ void Simulator::body_splits(double h) {
   // F_pressed the part that presses the body into its contacts (F·n < 0 along each contact's
   // normal n). The contact holds F_pressed, but for a body that feels a magnetic torque the pull
   // still sets the pair's shear, twist and rocking stiffness, which the explicit step must
-  // resolve. In a face contact (every manifold of the body with 3 or more points) friction and
-  // the contact face hold those modes, and F_pressed counts at their measured stiffness: two
+  // resolve. In a face contact at rest (RigidWorld::contact_normals' face_slip: three points of
+  // every manifold span a face, and they slide or close by less than 1% of the body's smallest
+  // extent over the substep, the impact guard's 1%) friction and the contact face hold those
+  // modes, and F_pressed counts at their measured stiffness: two
   // touching 1 cm N42 cubes under a 54.9 N pull, shear 16,800 N/m (3.06 |F|/a, a = 4 l the
   // smallest extent) and a slower twist, hence kPressedStiffness = 0.75 = 3/4 per l. Leaving
   // F_pressed out entirely let a resting pair of cubes walk 20 mm and gain 36% of its binding
-  // energy in 0.3 s at dt 1 ms. The face must also be at rest: its points slide or close by less
-  // than 1% of the body's smallest extent over the substep (as the impact guard's 1%), so that a
-  // magnet slamming its face down is still cut finely. About a point or line contact a body can
-  // roll or rock freely:
-  // there the whole |F| counts (two ball magnets snapping turned 53 degrees from each other gained
-  // up to 2.3% of their binding energy at 0.75 and 2.2-5.3% with a rolling-rate term instead).
+  // energy in 0.3 s at dt 1 ms; a magnet slamming its face down is still cut finely. About a
+  // point or line contact a body can roll or rock freely, and there the whole |F| counts (two
+  // ball magnets snapping turned 53 degrees from each other gained up to 2.3% of their binding
+  // energy at 0.75, 2.2-5.3% with a rolling-rate term instead).
   // A body with no magnetic torque (a soft sphere, Model::body_isotropic) has no rotational
   // stiffness, and what presses it into a contact cannot move it: its F_pressed does not count.
   // Impact: magnetic bodies that may touch within the step (Bullet's swept pair cache) and close
