@@ -1,6 +1,7 @@
 #include "rigid_world.h"
 
 #include "skin_contacts.h"
+#include "stuck_contacts.h"
 
 #include <BulletCollision/CollisionDispatch/btInternalEdgeUtility.h>
 #include <HACD/hacdHACD.h>
@@ -176,6 +177,8 @@ struct RigidWorld::Impl {
   // onto itself).
   std::vector<double> turn_reach;
   std::vector<double> aabb_pad;  // per body: broadphase box padding, m (ContactWorld::updateAabbs)
+  std::unique_ptr<StuckContacts> stuck;  // face contacts of magnets at rest, held by joints
+  std::vector<Vec3> shared_force, shared_torque;  // per body: step()'s forces after StuckContacts::share
   // Bullet's dynamic-tree margin (the global gDbvtMargin, 5 cm by default: a proxy's tree box
   // is that much larger than its AABB, and pairs live while tree boxes overlap). Set to this
   // world's value before every Bullet call that runs the broadphase, since it is a global.
@@ -330,6 +333,10 @@ RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>
   // at 1e-9, unconverged, and every few hundred substeps the pair "clacked": its cubes' spins
   // jumped by up to 90 rad/s for a substep (tests/sim/contact_test.cpp, physics.md §8).
   si.m_leastSquaresResidualThreshold = 1e-14;
+  // Every island in a solve of its own: Bullet batches small islands into one solve, and with the
+  // residual test above the batch's iteration count would depend on its other islands, so a
+  // body's motion would depend on unrelated bodies elsewhere in the scene (physics.md §8 item 9).
+  si.m_minimumSolverBatchSize = 1;
   si.m_splitImpulse = 1;
   si.m_splitImpulsePenetrationThreshold = -0.0002;  // cm-scale bodies (Bullet assumes metres)
   m.principal.resize(scene.bodies.size(), Mat3::Identity());
@@ -417,14 +424,21 @@ RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>
     m.world->addRigidBody(body.get());
     m.bodies.push_back(std::move(body));
   }
+  std::vector<StuckContacts::Body> stick(scene.bodies.size());
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    stick[i] = {scene.bodies[i].motion == scene::Motion::kDynamic, m.magnetic[i], m.permanent[i], m.extent[i]};
+  }
+  m.stuck = std::make_unique<StuckContacts>(std::move(stick));
 }
 
 RigidWorld::~RigidWorld() {
+  impl_->stuck->clear(*impl_->world);
   for (auto& b : impl_->bodies) impl_->world->removeRigidBody(b.get());
 }
 
 void RigidWorld::set_state(const SimState& s) {
   Impl& m = *impl_;
+  m.stuck->clear(*m.world);
   for (std::size_t i = 0; i < m.bodies.size(); ++i) {
     btRigidBody* b = m.bodies[i].get();
     const btTransform tr = m.bullet_transform(int(i), s.orientation[i], s.com_position[i]);
@@ -509,20 +523,27 @@ void RigidWorld::step(double t, double h, const std::vector<Vec3>& force, const 
     if (sb.motion == scene::Motion::kKinematic) {
       // The pose at the end of the step; Bullet derives the contact velocity from the change.
       b->setWorldTransform(m.keyed_transform(int(i), t + h));
-    } else if (sb.motion == scene::Motion::kDynamic) {
-      if (held && (*held)[i]) {
-        saved.push_back({int(i), b->getActivationState(), b->getDeactivationTime()});
-        b->forceActivationState(DISABLE_SIMULATION);
-        continue;
-      }
-      // Forces are cleared by every stepSimulation call, which also applies gravity once.
-      b->applyCentralForce(bt(force[i]));
-      b->applyTorque(bt(torque[i]));
+    } else if (sb.motion == scene::Motion::kDynamic && held && (*held)[i]) {
+      saved.push_back({int(i), b->getActivationState(), b->getDeactivationTime()});
+      b->forceActivationState(DISABLE_SIMULATION);
     }
+  }
+  // Bodies held together by stuck contacts move as one rigid body under their summed force and
+  // torque (StuckContacts::share); forces are cleared by every stepSimulation call, which also
+  // applies gravity once.
+  m.shared_force = force;
+  m.shared_torque = torque;
+  m.stuck->share(m.bodies, m.shared_force, m.shared_torque);
+  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+    if (m.scene.bodies[i].motion != scene::Motion::kDynamic || (held && (*held)[i])) continue;
+    m.bodies[i]->applyCentralForce(bt(m.shared_force[i]));
+    m.bodies[i]->applyTorque(bt(m.shared_torque[i]));
   }
   gDbvtMargin = m.dbvt_margin;
   if (m.sleep_time > 0) gDeactivationTime = btScalar(m.sleep_time);
+  m.stuck->before_step();
   m.world->stepSimulation(h, 0, h);
+  m.stuck->after_step(*m.world, m.dispatcher, m.bodies, h);
   for (const Saved& sv : saved) {
     btRigidBody* b = m.bodies[sv.body].get();
     b->forceActivationState(sv.state);
@@ -582,6 +603,7 @@ void RigidWorld::closing_rates(std::vector<double>& rate) const {
     // the strongest there is), one dynamic. Steel meeting a magnet is left to the force guard:
     // guarding it too made the 250 steel balls of DragonLow take 37 pieces per 1 ms, not 6.
     if (!m.permanent[i] || !m.permanent[j] || !(dyn_i || dyn_j)) continue;
+    if (m.stuck->stuck(i, j)) continue;  // held together: neither closes nor turns
     // Pairs already touching are the contact solver's (it stops them within the step) as far as
     // their approach goes; but one that turns against the other (a tumbling cylinder that has
     // met a box with its rim and slams its side down) closes elsewhere at up to the turn rate
@@ -629,10 +651,15 @@ RigidWorld::Penetration RigidWorld::deepest_penetration() const {
   return out;
 }
 
-void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out, std::vector<double>* face_slip) const {
+void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out, std::vector<double>* face_slip,
+                                 std::vector<std::vector<std::uint8_t>>* stuck) const {
   const Impl& m = *impl_;
   out.resize(m.scene.bodies.size());
   for (auto& n : out) n.clear();
+  if (stuck) {
+    stuck->resize(m.scene.bodies.size());
+    for (auto& n : *stuck) n.clear();
+  }
   if (face_slip) face_slip->assign(m.scene.bodies.size(), 0.0);
   btCollisionDispatcher& d = const_cast<btCollisionDispatcher&>(m.dispatcher);
   for (int k = 0; k < d.getNumManifolds(); ++k) {
@@ -645,7 +672,7 @@ void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out, std::vecto
     int touching = 0;
     for (int c = 0; c < mf->getNumContacts() && touching < 4; ++c) {
       const btManifoldPoint& pt = mf->getContactPoint(c);
-      if (pt.getDistance() >= 1e-4) continue;
+      if (pt.getDistance() >= kTouchingDistance) continue;
       const btVector3& w = pt.getPositionWorldOnB();
       p[touching] = Vec3(w.x(), w.y(), w.z());
       if (face_slip) {
@@ -659,22 +686,27 @@ void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out, std::vecto
       const Vec3 n(pt.m_normalWorldOnB.x(), pt.m_normalWorldOnB.y(), pt.m_normalWorldOnB.z());
       if (a >= 0) out[a].push_back(n);
       if (b >= 0) out[b].push_back(-n);
+      if (stuck) {
+        if (a >= 0) (*stuck)[a].push_back(0);
+        if (b >= 0) (*stuck)[b].push_back(0);
+      }
     }
     if (!face_slip || touching == 0) continue;
-    // A face contact: three of its points span a triangle of at least half the square of a tenth
-    // of the smaller body's smallest extent. A persistent manifold of a rolling ball keeps stale
-    // points close together, which do not count. Anything else is a point or line contact.
+    // A face contact (spans_face); anything else is a point or line contact.
     double size = std::numeric_limits<double>::infinity();
     if (a >= 0) size = std::min(size, m.extent[a]);
     if (b >= 0) size = std::min(size, m.extent[b]);
-    double area2 = 0;  // twice the largest triangle's area, m²
-    for (int i = 0; i < touching; ++i)
-      for (int j = i + 1; j < touching; ++j)
-        for (int q = j + 1; q < touching; ++q) area2 = std::max(area2, (p[j] - p[i]).cross(p[q] - p[i]).norm());
-    if (area2 < 0.01 * size * size) slip = std::numeric_limits<double>::infinity();
+    if (!spans_face(p, touching, size)) slip = std::numeric_limits<double>::infinity();
     if (a >= 0) (*face_slip)[a] = std::max((*face_slip)[a], slip);
     if (b >= 0) (*face_slip)[b] = std::max((*face_slip)[b], slip);
   }
+  m.stuck->normals(out, stuck);
+}
+
+int RigidWorld::stuck_contacts() const { return impl_->stuck->count(); }
+
+void RigidWorld::stuck_shares(std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
+  impl_->stuck->shared(impl_->bodies, force, torque);
 }
 
 std::vector<RigidWorld::Penetration> RigidWorld::separate_overlaps(double tolerance, int max_iterations) {

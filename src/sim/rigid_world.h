@@ -69,8 +69,17 @@ class RigidWorld {
   /// largest speed of one body's contact point relative to the other's; infinite when one of
   /// them is not a face contact (no three of its points within 0.1 mm span a triangle of area
   /// 0.005 s², s the smaller body's smallest extent), i.e. a point or line contact about which
-  /// the body can roll or rock freely; 0 without contacts.
-  void contact_normals(std::vector<std::vector<Vec3>>& out, std::vector<double>* face_slip = nullptr) const;
+  /// the body can roll or rock freely; 0 without contacts. `stuck` (optional, per body, parallel
+  /// to `out`): 1 where the contact is a stuck contact (StuckContacts: the pair is held by a
+  /// joint), else 0.
+  void contact_normals(std::vector<std::vector<Vec3>>& out, std::vector<double>* face_slip = nullptr,
+                       std::vector<std::vector<std::uint8_t>>* stuck = nullptr) const;
+  /// Number of face contacts held by a joint now (StuckContacts).
+  int stuck_contacts() const;
+  /// Replaces the forces (N) and torques (N·m, about the centre of mass, world frame) of the
+  /// bodies held together by stuck contacts by their shares of their group's load, as step()
+  /// applies them (StuckContacts::shared); others are unchanged.
+  void stuck_shares(std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
   /// Moves dynamic bodies apart along their contact normals until no pair penetrates deeper
   /// than `tolerance` (m). Positions only: velocities are kept, so no kinetic energy is added.
   /// Returns the pairs that overlapped by more than `tolerance` before, deepest first.

@@ -111,7 +111,7 @@ void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
 }
 
 void Simulator::refresh_contacts() {
-  world_->contact_normals(contact_normals_, &face_slip_);
+  world_->contact_normals(contact_normals_, &face_slip_, &contact_stuck_);
 }
 
 void Simulator::update_sleep(FrameDiagnostics& d) {
@@ -172,18 +172,30 @@ void Simulator::body_splits(double h) {
   // snapping magnet does not sink into its partner: pushing a deep penetration out against the
   // magnetic pull is where the old step gained energy (physics.md §8).
   world_->closing_rates(closing_);
+  // Bodies held together by stuck contacts: their shares of the group's load from outside it
+  // (the joints resolve the pull between them implicitly, RigidWorld::stuck_shares).
+  shared_force_ = state_.magnetic_force;
+  shared_torque_ = state_.magnetic_torque;
+  world_->stuck_shares(shared_force_, shared_torque_);
   split_.assign(scene_.bodies.size(), 0);
   for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
     const scene::Body& b = scene_.bodies[i];
     if (b.motion != scene::Motion::kDynamic || b.mass <= 0 || state_.sleep[i] == kAsleep) continue;
-    const Vec3& force = state_.magnetic_force[i];
-    Vec3 free = force;
-    double pressed = 0;  // N
-    for (const Vec3& n : contact_normals_[i]) {
+    Vec3 free = shared_force_[i];
+    double pressed = 0;  // N, into contacts that are not stuck
+    Vec3 unstuck = free;  // the force without what presses into stuck contacts
+    for (std::size_t c = 0; c < contact_normals_[i].size(); ++c) {
+      const Vec3& n = contact_normals_[i][c];
       const double press = free.dot(n);
-      if (press < 0) free -= press * n, pressed -= press;
+      if (press >= 0) continue;
+      free -= press * n;
+      if (contact_stuck_[i][c]) {
+        unstuck -= press * n;
+      } else {
+        pressed -= press;
+      }
     }
-    double k_lin = 4.0 * force.norm() / stiffness_length_[i];
+    double k_lin = 4.0 * unstuck.norm() / stiffness_length_[i];
     if (contact_exempt_[i]) {
       k_lin = 4.0 * free.norm() / stiffness_length_[i];
     } else if (pressed > 0 && face_slip_[i] * h < 0.04 * stiffness_length_[i]) {

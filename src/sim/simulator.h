@@ -40,8 +40,11 @@ class NumericalFault : public std::runtime_error {
 ///     that may touch within the step): islands that need no split take the substep in one
 ///     piece while the others are held, then the islands that need it take their pieces while
 ///     the first are held (and fixed in the magnetics, so their mutual forces are not
-///     recomputed);
-///  3. Bullet advances one substep with kinematic bodies moved to their keyed pose at t + h;
+///     recomputed). Bodies held together by stuck contacts (face contacts of magnets at rest,
+///     joints in Bullet's solver) count only their shares of their group's load from outside;
+///  3. Bullet advances one substep with kinematic bodies moved to their keyed pose at t + h,
+///     then lets go of the stuck contacts that friction can no longer hold and joins those that
+///     came to rest (StuckContacts, physics.md §8 item 11);
 ///  4. NaN/Inf anywhere stops with a NumericalFault naming the body and frame;
 ///  5. bodies at rest for Scene::sleep_time fall asleep (Bullet islands); they count as fixed in
 ///     the magnetics and do not split substeps, and wake on contact or when their magnetic force
@@ -124,6 +127,8 @@ class Simulator {
   std::vector<std::uint8_t> contact_exempt_;  // per body: dynamic and without magnetic torque (body_splits)
   std::vector<std::vector<Vec3>> contact_normals_;  // per body, of the last step (refresh_contacts())
   std::vector<double> face_slip_;         // per body: RigidWorld::contact_normals' face_slip, m/s
+  std::vector<std::vector<std::uint8_t>> contact_stuck_;  // per body, per contact normal: a stuck contact
+  std::vector<Vec3> shared_force_, shared_torque_;  // per body: body_splits' forces after RigidWorld::stuck_shares
   std::vector<RigidWorld::Penetration> initial_overlaps_;
   bool sleep_ = false;                    // Scene::sleep_time > 0
   std::vector<double> wake_force_;        // per body, N: force change that wakes it

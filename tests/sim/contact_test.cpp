@@ -211,8 +211,9 @@ TEST(Contact, SpinningSnappedDumbbellKeepsItsAngularMomentum) {
   const Vec3 l0 = r.sim->measure().angular_momentum;
   ASSERT_NEAR(l0.z(), 6.25e-6, 1e-8);  // 2 (m r v + I w) = 2 (7.5e-3 0.005 0.05 + 1.25e-7 10)
   double worst_spin = 0, worst_gap = 0;
+  int substeps = 0;
   for (int f = 0; f < 25; ++f) {
-    r.sim->advance_frame();
+    substeps += r.sim->advance_frame().substeps;
     const SimState& s = r.sim->state();
     for (int b = 0; b < 2; ++b) worst_spin = std::max(worst_spin, std::abs(s.angular_velocity[b].z() - 10.0));
     worst_gap = std::max(worst_gap, std::abs((s.com_position[0] - s.com_position[1]).norm() - 0.01));
@@ -220,13 +221,54 @@ TEST(Contact, SpinningSnappedDumbbellKeepsItsAngularMomentum) {
   const Vec3 l1 = r.sim->measure().angular_momentum;
   const double loss = 1.0 - l1.norm() / l0.norm();
   std::printf("dumbbell: angular momentum %.6e -> %.6e kg m^2/s in 0.25 s (%.3f%% per second), spins off the "
-              "pair's by up to %.3f rad/s, centres off 10 mm by up to %.2e mm\n",
-              l0.norm(), l1.norm(), 100 * loss / 0.25, worst_spin, 1e3 * worst_gap);
-  // The issue asked for under 5% per second; README states 1e-6 over 0.25 s (measured: no
-  // change in 7 digits, spins within 1e-3 rad/s, centres within 1e-8 m).
-  EXPECT_LT(std::abs(loss), 1e-5);
+              "pair's by up to %.3f rad/s, centres off 10 mm by up to %.2e mm; %d Bullet steps for 250 nominal\n",
+              l0.norm(), l1.norm(), 100 * loss / 0.25, worst_spin, 1e3 * worst_gap, substeps);
+  // The issue asked for under 5% per second. The pair sticks (StuckContacts) and turns as one
+  // body held by a joint, whose position correction lets the centres breathe by a few um
+  // (measured: 1.7e-5 of the angular momentum over 0.25 s, spins within 3e-3 rad/s, centres
+  // within 2.5 um; before sticking, held by the contact alone in 3 pieces per step: 1e-7, 1e-3
+  // rad/s, 1e-8 m).
+  EXPECT_LT(std::abs(loss), 1e-4);
   EXPECT_LT(worst_spin, 1e-2);                // each cube turns with the pair
-  EXPECT_LT(worst_gap, 1e-6);                 // and they stay snapped
+  EXPECT_LT(worst_gap, 5e-6);                 // and they stay snapped
+  // Held, the pair's pull is the joints' (resolved implicitly) and its load from outside is zero:
+  // no pieces (the force guard cut each 1 ms into 3 before the pair could stick).
+  EXPECT_LE(substeps, 250 + 5);
+}
+
+// A magnet on the side of a fixed bar magnet ("on the fridge"), gravity along the contact face: a
+// stuck contact (StuckContacts, physics.md §8 item 11) holds it while friction can, mu F_n > m g,
+// and lets it slide when friction cannot. The weaker magnet's remanence sets the pull F_n
+// (measured by magbake itself at the first frame); friction 1 x 0.5 (Bullet multiplies them).
+TEST(Contact, StuckMagnetHoldsWhileFrictionCanAndSlidesWhenItCannot) {
+  for (const double remanence : {0.01, 0.0015}) {
+    Bake r("magbake: 1\nunits: {length: mm, angle: deg}\ntime: {fps: 100, frames: [1, 11], dt: 0.001}\n"
+           "gravity: [0, 0, -9810]\nmaterials: {N42: {kind: permanent, remanence: 1.3, density: 7500},"
+           " weak: {kind: permanent, remanence: " + std::to_string(remanence) + ", density: 7500}}\n"
+           "bodies:\n"
+           "  - {name: wall, shape: {box: [10, 10, 200]}, material: N42, magnetization: [1, 0, 0], motion: static,"
+           " position: [0, 0, -50],"
+           " friction: 1}\n"
+           "  - {name: b, shape: {box: [10, 10, 10]}, material: weak, magnetization: [1, 0, 0], position: [10, 0, 0],"
+           " friction: 0.5}\n");
+    const double pull = -r.sim->state().magnetic_force[1].x();  // N, towards the wall
+    const double weight = 7500 * 1e-6 * 9.81, mu = 0.5;
+    ASSERT_GT(pull, 0);
+    const Vec3 p0 = r.sim->state().com_position[1];
+    for (int f = 0; f < 10; ++f) r.sim->advance_frame();
+    const SimState& s = r.sim->state();
+    const double drop = p0.z() - s.com_position[1].z();  // m, after 0.1 s
+    const double expected = 0.5 * (9.81 - mu * pull / 7.5e-3) * 0.1 * 0.1;  // sliding with kinetic friction
+    std::printf("on the fridge, remanence %.4f T: pull %.4f N, mu F_n %.4f N against weight %.4f N: dropped %.4f mm "
+                "in 0.1 s (sliding would drop %.2f mm), off the wall by %.4f mm\n",
+                remanence, pull, mu * pull, weight, 1e3 * drop, 1e3 * expected, 1e3 * (s.com_position[1].x() - 0.01));
+    if (mu * pull > weight) {
+      EXPECT_LT(std::abs(drop), 2e-6);  // held
+    } else {
+      EXPECT_NEAR(drop, expected, 0.05 * expected);  // slides as kinetic friction says
+    }
+    EXPECT_LT(std::abs(s.com_position[1].x() - 0.01), 5e-5);  // on the wall all the while
+  }
 }
 
 // A steel ball (radius 5 mm, chi 700) resting on top of a cylinder magnet, dt 1 ms: the pull that
@@ -270,10 +312,10 @@ TEST(Contact, SteelBallRestingOnAMagnetNeedsNoSubsteps) {
   EXPECT_GT(snap_substeps, 50);
 }
 
-// Two cube magnets resting face to face on a table, dt 1 ms (issue 11, outcome 2; physics.md §8,
-// the force guard): the pull that presses each into the face contact counts at the pair's
-// measured shear stiffness (0.75 |F| / l), not at 4 |F| / l, so the pair takes 3 pieces per
-// substep instead of 7, and stays where it is without gaining energy.
+// Two cube magnets resting face to face on a table, dt 1 ms (issue 11, outcome 2; physics.md §8
+// item 11): the face contact sticks (a joint in Bullet's solver holds the pull), so the pair takes
+// each substep in one piece (7 pieces with the whole pull in the force guard, 3 with the pressed
+// pull at the pair's shear stiffness), and stays where it is without gaining energy.
 TEST(Contact, CubesRestingFaceToFaceTakeFewPieces) {
   std::string s = snap_scene(1e-3, true, 30);
   for (const char* from : {"position: [-10, 0, 5]", "position: [10, 0, 5]"}) {
@@ -294,7 +336,7 @@ TEST(Contact, CubesRestingFaceToFaceTakeFewPieces) {
   const double moved = std::max((r.sim->state().com_position[1] - a0).norm(), (r.sim->state().com_position[2] - b0).norm());
   std::printf("cubes resting face to face: %d Bullet steps for %d nominal (%.2f per substep), moved %.4f mm, "
               "energy rise %.2e J\n", substeps, nominal, double(substeps) / nominal, 1e3 * moved, worst_rise);
-  EXPECT_LE(substeps, 3 * nominal + 1);  // 7 per substep with the whole pull counted
+  EXPECT_LE(substeps, nominal + 3);  // the first steps, before the pair sticks, may take pieces
   EXPECT_LT(moved, 5e-5);
   EXPECT_LT(worst_rise, 1e-4);  // of a binding energy of 0.16 J
 }
