@@ -592,6 +592,7 @@ void RigidWorld::closing_rates(std::vector<double>& rate) const {
   rate.assign(m.bodies.size(), 0.0);
   btOverlappingPairCache* cache = m.world->getBroadphase()->getOverlappingPairCache();
   const btBroadphasePairArray& pairs = cache->getOverlappingPairArray();
+  btManifoldArray manifolds;  // reused: one allocation, not one per pair
   for (int k = 0; k < pairs.size(); ++k) {
     const auto* o0 = static_cast<const btCollisionObject*>(pairs[k].m_pProxy0->m_clientObject);
     const auto* o1 = static_cast<const btCollisionObject*>(pairs[k].m_pProxy1->m_clientObject);
@@ -612,7 +613,7 @@ void RigidWorld::closing_rates(std::vector<double>& rate) const {
     const auto* b1 = btRigidBody::upcast(o1);
     const double length = 0.01 * std::min(m.extent[i], m.extent[j]);
     if (pairs[k].m_algorithm) {
-      btManifoldArray manifolds;
+      manifolds.resize(0);
       pairs[k].m_algorithm->getAllContactManifolds(manifolds);
       bool touching = false;
       for (int q = 0; q < manifolds.size() && !touching; ++q) {

@@ -222,22 +222,31 @@ void StuckContacts::after_step(btDiscreteDynamicsWorld& world, btCollisionDispat
     }
   }
 
-  // Join: eligible face contacts at rest that press (a positive normal impulse). One manifold
-  // per pair: pairs with several (compound shapes) are not one face and never stick.
-  std::map<std::pair<int, int>, btPersistentManifold*> manifold;
+  // Join: eligible face contacts at rest that press (a positive normal impulse). A face needs
+  // three points, and one manifold per pair: compounds of several shapes (a manifold per
+  // child) never stick.
+  // Candidates are taken in pair order.
+  auto pieces = [](const btCollisionObject* o) {  // a compound of several shapes
+    const btCollisionShape* shape = o->getCollisionShape();
+    return shape->isCompound() && static_cast<const btCompoundShape*>(shape)->getNumChildShapes() > 1;
+  };
+  std::vector<std::pair<std::pair<int, int>, btPersistentManifold*>> candidates;
   for (int k = 0; k < dispatcher.getNumManifolds(); ++k) {
     btPersistentManifold* mf = dispatcher.getManifoldByIndexInternal(k);
+    if (mf->getNumContacts() < 3) continue;
     const int a = mf->getBody0()->getUserIndex(), b = mf->getBody1()->getUserIndex();
     if (a < 0 || b < 0 || a == b) continue;
-    const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-    const auto [at, fresh] = manifold.emplace(key, mf);
-    if (!fresh) at->second = nullptr;
-  }
-  for (const auto& [key, mf] : manifold) {
-    if (!mf || joints_.count(key)) continue;
-    const auto [a, b] = key;
     const Body &ba = bodies_[a], &bb = bodies_[b];
     if (!(ba.dynamic || bb.dynamic) || !ba.magnetic || !bb.magnetic || !(ba.permanent || bb.permanent)) continue;
+    if (pieces(mf->getBody0()) || pieces(mf->getBody1())) continue;
+    candidates.push_back({{std::min(a, b), std::max(a, b)}, mf});
+  }
+  std::sort(candidates.begin(), candidates.end(),
+            [](const auto& x, const auto& y) { return x.first < y.first; });
+  for (const auto& [key, mf] : candidates) {
+    if (joints_.count(key)) continue;
+    const auto [a, b] = key;
+    const Body &ba = bodies_[a], &bb = bodies_[b];
     btRigidBody& ra = *bodies[a];
     btRigidBody& rb = *bodies[b];
     if (ra.isKinematicObject() || rb.isKinematicObject() || (!ra.isActive() && !rb.isActive())) continue;
