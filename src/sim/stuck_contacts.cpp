@@ -189,6 +189,38 @@ void StuckContacts::after_step(btDiscreteDynamicsWorld& world, btCollisionDispat
   // Release: the joint's force on A (at the contact's centroid) and its couple, over the step,
   // against the contact's cone. The pair's contact points are off while it is held (Bullet does
   // not collide bodies joined by a constraint), so the joint carries the whole contact wrench.
+  // The joints as they were in the step, as adjacency lists (other body, joint), and
+  // side_load(): over the bodies reachable from `from` without crossing joint j, the sum of
+  // share()'s moved forces and their moments (with the moved torques) about `pivot`; false when
+  // `to` is reachable (a loop) or a static body is (its reaction is unknown).
+  const std::size_t graph = joints_.empty() ? 0 : bodies_.size();  // nothing to cut without joints
+  std::vector<std::vector<std::pair<int, const Joint*>>> adjacent(graph);
+  for (const auto& [key, jt] : joints_) {
+    adjacent[jt->a].push_back({jt->b, jt.get()});
+    adjacent[jt->b].push_back({jt->a, jt.get()});
+  }
+  std::vector<int> seen_by(graph, -1);  // per body: the last traversal that reached it
+  int traversal = 0;
+  std::vector<int> stack;
+  auto side_load = [&](const Joint& j, int from, int to, const Vec3& pivot, Vec3& f, Vec3& t) {
+    f.setZero(), t.setZero();
+    ++traversal;
+    stack.assign(1, from);
+    seen_by[from] = traversal;
+    while (!stack.empty()) {
+      const int i = stack.back();
+      stack.pop_back();
+      if (i == to || !bodies_[i].dynamic) return false;
+      f += moved_force_[i];
+      t += moved_torque_[i] + (eig(bodies[i]->getCenterOfMassPosition()) - pivot).cross(moved_force_[i]);
+      for (const auto& [other, via] : adjacent[i]) {
+        if (via == &j || seen_by[other] == traversal) continue;
+        seen_by[other] = traversal;
+        stack.push_back(other);
+      }
+    }
+    return true;
+  };
   for (auto it = joints_.begin(); it != joints_.end();) {
     Joint& j = *it->second;
     const btRigidBody& ra = j.point->getRigidBodyA();
@@ -199,17 +231,26 @@ void StuckContacts::after_step(btDiscreteDynamicsWorld& world, btCollisionDispat
     const Vec3 n = eig(ra.getWorldTransform().getBasis() * bt(j.normal_in_a));
     const Vec3 pivot = eig(ra.getWorldTransform() * j.point->getPivotInA());
     // The wrench on A from B: the joints' (force at the pivot, couple), and what share() moved
-    // off A's force and torque, which B held (a body with several joints: its share of it; from
-    // the side with fewer joints, exact for a pair and for the ends of a chain).
-    const bool from_a = bodies_[j.a].dynamic && (!bodies_[j.b].dynamic || joints_of[j.a] <= joints_of[j.b]);
-    const int side = from_a ? j.a : j.b;
-    const double sign = from_a ? 1.0 : -1.0;
-    const Vec3 moved_f = sign * moved_force_[side] / std::max(1, joints_of[side]);
-    const Vec3 moved_t = sign * moved_torque_[side] / std::max(1, joints_of[side]);
-    const Vec3 at = eig(bodies[side]->getCenterOfMassPosition());
+    // off the loads of the bodies on A's side of this joint (the group cut here), which the
+    // joint would carry had share() not moved it; or minus that of B's side when A's side holds
+    // a static body. In a group with a loop of joints the cut is not unique: there, A's own
+    // moved load shared among its joints (from the side with fewer joints).
+    Vec3 moved_f = Vec3::Zero(), moved_t = Vec3::Zero();
+    if (!side_load(j, j.a, j.b, pivot, moved_f, moved_t)) {
+      if (side_load(j, j.b, j.a, pivot, moved_f, moved_t)) {
+        moved_f = -moved_f, moved_t = -moved_t;
+      } else {
+        const bool from_a = bodies_[j.a].dynamic && (!bodies_[j.b].dynamic || joints_of[j.a] <= joints_of[j.b]);
+        const int side = from_a ? j.a : j.b;
+        const double sign = from_a ? 1.0 : -1.0;
+        moved_f = sign * moved_force_[side] / std::max(1, joints_of[side]);
+        const Vec3 at = eig(bodies[side]->getCenterOfMassPosition());
+        moved_t = sign * moved_torque_[side] / std::max(1, joints_of[side]) + (at - pivot).cross(moved_f);
+      }
+    }
     // Over the step, about the pivot (the contact's centroid).
     const Vec3 force = eig(j.point_feedback.m_appliedForceBodyA) + moved_f;
-    const Vec3 couple = eig(j.turn_feedback.m_appliedTorqueBodyA) + moved_t + (at - pivot).cross(moved_f);
+    const Vec3 couple = eig(j.turn_feedback.m_appliedTorqueBodyA) + moved_t;
     const double fn = force.dot(n);
     const double shear = (force - fn * n).norm();
     const double twist = std::abs(couple.dot(n));

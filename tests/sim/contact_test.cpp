@@ -341,6 +341,40 @@ TEST(Contact, CubesRestingFaceToFaceTakeFewPieces) {
   EXPECT_LT(worst_rise, 1e-4);  // of a binding energy of 0.16 J
 }
 
+// A chain of four cube magnets resting face to face on a table, a smaller one held at its end
+// (physics.md §8 item 11): every
+// contact sticks, and the middle ones stay stuck, since each joint is tested against the load
+// of the whole chain on one side of it (testing a middle joint against half of its cube's own
+// load released it after every step, and the chain took 2 pieces per step).
+TEST(Contact, ChainOfCubesRestingTakesNoPieces) {
+  std::string s = snap_scene(1e-3, true, 30);
+  s = s.substr(0, s.find("  - {name: a,"));
+  for (int k = 0; k < 4; ++k) {
+    s += "  - {name: c" + std::to_string(k) + ", shape: {box: [10, 10, 10]}, material: N42, magnetization: [1, 0, 0], "
+         "position: [" + std::to_string(-15.0015 + 10.001 * k) + ", 0, 5.001], friction: 0.5}\n";
+  }
+  // and a smaller magnet at one end, on the chain's face but off the table (held by the chain)
+  s += "  - {name: end, shape: {box: [6, 6, 6]}, material: N42, magnetization: [1, 0, 0], position: [23.0025, 0, 5.001], "
+       "friction: 0.5}\n";
+  Bake r(s);
+  std::vector<Vec3> p0(r.sim->state().com_position);
+  int substeps = 0, nominal = 0;
+  double lowest = 1e300, worst_rise = 0;
+  for (int f = 0; f < 30; ++f) {
+    const FrameDiagnostics d = r.sim->advance_frame();
+    substeps += d.substeps, nominal += r.scene.steps_per_frame();
+    lowest = std::min(lowest, d.total_energy());
+    worst_rise = std::max(worst_rise, d.total_energy() - lowest);
+  }
+  double moved = 0;
+  for (int i = 1; i <= 5; ++i) moved = std::max(moved, (r.sim->state().com_position[i] - p0[i]).norm());
+  std::printf("chain of four cubes resting: %d Bullet steps for %d nominal, moved %.4f mm, energy rise %.2e J\n",
+              substeps, nominal, 1e3 * moved, worst_rise);
+  EXPECT_LE(substeps, nominal + 3);
+  EXPECT_LT(moved, 5e-5);
+  EXPECT_LT(worst_rise, 1e-4);
+}
+
 // Per-island substeps (issue 11, outcome 2; physics.md §8): two cube magnets snapping on a table
 // need short pieces; six wooden blocks resting on the same table 6-10 cm away, and a lone magnet
 // 12 cm away, do not, and are not refined with them. The snapping pair moves exactly as it does
