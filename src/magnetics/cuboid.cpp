@@ -154,8 +154,24 @@ int parallel_axis(const Vec3& e) {
   return -1;
 }
 
+// A magnetization given in the world, in a cuboid's frame (Rt = the frame's rotation,
+// transposed). A magnetization along one of the cuboid's axes comes back with round-off
+// components (~1e-16 of it) along the others; they are set to zero, so that the charge-free
+// faces are skipped (cuboid_h_and_potential, cuboid_pair: a third of the work per axis; the
+// near field of touching cube magnets ran 7x slower with them). Components below 1e-12 of the
+// largest are no physical part of any magnet (a tilt of 1e-12 rad).
+Vec3 in_frame(const Mat3& Rt, const Vec3& M) {
+  Vec3 L = Rt * M;
+  const double tiny = 1e-12 * L.cwiseAbs().maxCoeff();
+  for (int a = 0; a < 3; ++a) {
+    if (std::abs(L[a]) <= tiny) L[a] = 0.0;
+  }
+  return L;
+}
+
 // H (A/m) and, with `phi`, the scalar potential (A) of a cuboid at x (cuboid frame).
-Vec3 cuboid_h_and_potential(const Vec3& half, const Vec3& M, const Vec3& x, double* phi) {
+Vec3 cuboid_h_and_potential(const Vec3& half, const Vec3& M_given, const Vec3& x, double* phi) {
+  const Vec3 M = in_frame(Mat3::Identity(), M_given);
   Vec3 H = Vec3::Zero();
   double p = 0.0;
   for (int w = 0; w < 3; ++w) {
@@ -240,8 +256,8 @@ void cuboid_pair(const Cuboid& k, const Cuboid& i, int order, Vec3& force, Vec3&
   const Mat3 Rit = i.rotation.transpose();
   const Vec3 ck = Rit * (k.center - i.center);
   const Mat3 Rk = Rit * k.rotation;          // k frame -> i frame
-  const Vec3 Mi = Rit * i.magnetization;     // i frame
-  const Vec3 Mk_local = k.rotation.transpose() * k.magnetization;  // k frame: face charges
+  const Vec3 Mi = in_frame(Rit, i.magnetization);                   // i frame
+  const Vec3 Mk_local = in_frame(k.rotation.transpose(), k.magnetization);  // k frame: face charges
   const double scale = std::max({k.half.maxCoeff(), i.half.maxCoeff()});
 
   Vec3 F = Vec3::Zero(), T = Vec3::Zero();
