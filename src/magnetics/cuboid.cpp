@@ -170,8 +170,8 @@ Vec3 in_frame(const Mat3& Rt, const Vec3& M) {
 }
 
 // H (A/m) and, with `phi`, the scalar potential (A) of a cuboid at x (cuboid frame).
-Vec3 cuboid_h_and_potential(const Vec3& half, const Vec3& M_given, const Vec3& x, double* phi) {
-  const Vec3 M = in_frame(Mat3::Identity(), M_given);
+// M must come through in_frame() (its zero components skip faces).
+Vec3 cuboid_h_and_potential(const Vec3& half, const Vec3& M, const Vec3& x, double* phi) {
   Vec3 H = Vec3::Zero();
   double p = 0.0;
   for (int w = 0; w < 3; ++w) {
@@ -195,12 +195,12 @@ Vec3 cuboid_h_and_potential(const Vec3& half, const Vec3& M_given, const Vec3& x
 }  // namespace
 
 Vec3 cuboid_h_field(const Vec3& half, const Vec3& M, const Vec3& x) {
-  return cuboid_h_and_potential(half, M, x, nullptr);
+  return cuboid_h_and_potential(half, in_frame(Mat3::Identity(), M), x, nullptr);
 }
 
 double cuboid_potential(const Vec3& half, const Vec3& M, const Vec3& x) {
   double phi = 0.0;
-  cuboid_h_and_potential(half, M, x, &phi);
+  cuboid_h_and_potential(half, in_frame(Mat3::Identity(), M), x, &phi);
   return phi;
 }
 
