@@ -137,7 +137,7 @@ int run(int argc, char** argv) {
   check->add_option("scene", scene_path, "scene file (YAML)")->required();
   double trial_seconds = 2.0;
   check->add_option("--trial", trial_seconds,
-                    "seconds of trial bake behind the cost estimate (0 = none)")->capture_default_str()->check(CLI::Range(0.0, 1e6));
+                    "seconds of trial bake behind the cost estimate (0 = none; up to 4x longer while its cost per step is still changing)")->capture_default_str()->check(CLI::Range(0.0, 1e6));
   check->add_flag("--json", json, "JSON on stdout (SI units)");
 
   auto* info = app.add_subcommand("info", "human-readable summary of a scene or a cache");

@@ -10,6 +10,25 @@
 
 namespace magbake::sim {
 
+namespace {
+
+// Whether a trial's cost per step has settled: over its last quarter the substeps and the cell
+// + node pairs per step are within 25% of the quarter before (at least 8 steps seen).
+bool settled(const std::vector<std::array<double, 6>>& cost) {
+  const std::size_t n = cost.size(), q = n / 4;
+  if (n < 8) return false;
+  for (int k : {2, 5}) {
+    double last = 0, before = 0;
+    for (std::size_t j = n - q; j < n; ++j) last += cost[j][k];
+    for (std::size_t j = n - 2 * q; j < n - q; ++j) before += cost[j][k];
+    if (last == before) continue;
+    if (last > 1.25 * before || before > 1.25 * last) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 CostEstimate estimate_cost(const scene::Scene& scene, const magnetics::Model& model, double budget_seconds,
                            int max_steps) {
   CostEstimate e;
@@ -24,7 +43,10 @@ CostEstimate estimate_cost(const scene::Scene& scene, const magnetics::Model& mo
   trial.dt = span / static_cast<double>(per_frame);
   trial.fps = 1.0 / trial.dt;
   trial.first_frame = 0;
-  trial.last_frame = static_cast<int>(std::min<long long>(e.nominal_steps, max_steps));
+  // At most kTrialExtension x max_steps (while the cost has not settled), and the shot.
+  const long long cap = std::min<long long>(e.nominal_steps, static_cast<long long>(std::min<double>(
+                                                                 kTrialExtension * max_steps, 1e9)));
+  trial.last_frame = static_cast<int>(cap);
   Simulator sim(trial, model);
   const auto t0 = std::chrono::steady_clock::now();
   sim.initialize();
@@ -34,7 +56,9 @@ CostEstimate estimate_cost(const scene::Scene& scene, const magnetics::Model& mo
     const FrameDiagnostics d = sim.advance_frame();
     cost.push_back({d.magnetics_seconds, d.rigid_seconds, double(d.substeps), double(d.evaluations),
                     double(d.induction_iterations), static_cast<double>(d.cells_visited)});
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > budget_seconds) break;
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const bool over = elapsed > budget_seconds || static_cast<long long>(cost.size()) >= max_steps;
+    if (over && (elapsed > kTrialExtension * budget_seconds || settled(cost))) break;
   }
   e.trial_steps = static_cast<int>(cost.size());
   e.trial_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -23,9 +23,15 @@ struct CostEstimate {
   double seconds() const { return magnetics_seconds + rigid_seconds; }
 };
 
-/// Runs the first nominal steps of `scene` (at most `max_steps`, and stops after the step that
-/// takes the trial past `budget_seconds` of wall time) and adds, for the rest of the shot, what
-/// the trial's second half cost per step. `model` must be built from `scene`. The trial sees the
+/// How much longer than its budget a trial may run while its cost per step is still changing.
+inline constexpr double kTrialExtension = 4.0;
+
+/// Runs the first nominal steps of `scene` and adds, for the rest of the shot, what the trial's
+/// second half cost per step. The trial stops after `max_steps` steps or the step that takes it
+/// past `budget_seconds` of wall time once its cost per step has settled (the substeps and cell
+/// pairs of its last quarter within 25% of the quarter before), and at the latest at
+/// kTrialExtension x either: a shot that starts with magnets snapping and then rests
+/// is not extrapolated from the snap. `model` must be built from `scene`. The trial sees the
 /// shot's beginning only: a scene whose cost changes later (magnets that snap after the trial)
 /// is estimated from its start.
 CostEstimate estimate_cost(const scene::Scene& scene, const magnetics::Model& model, double budget_seconds,
