@@ -29,7 +29,15 @@ void State::resize(const Model& m) {
 namespace {
 // World geometry and permanent moments of every cell and node.
 void update_geometry(const Model& m, State& s) {
-  for (int b = 0; b < m.body_count; ++b) s.body_rotation[b] = s.body_pose[b].rotation.normalized().toRotationMatrix();
+  // A soft sphere's cells stay aligned with the world as it turns (Model::body_isotropic): its
+  // field, forces and energy then do not depend on its orientation at all, as the sphere's own
+  // do not, which its zero torque assumes. Turned with the body, the cells' staircase made the
+  // force on a rolling steel ball change with its angle while no torque did work for it: a ball
+  // rattling against a magnet gained 20 mJ in 0.3 s (physics.md §8).
+  for (int b = 0; b < m.body_count; ++b) {
+    const bool world_aligned = b < static_cast<int>(m.body_isotropic.size()) && m.body_isotropic[b];
+    s.body_rotation[b] = world_aligned ? Mat3::Identity() : s.body_pose[b].rotation.normalized().toRotationMatrix();
+  }
   for (std::size_t p = 0; p < m.part_body.size(); ++p) s.part_rotation[p] = s.body_rotation[m.part_body[p]] * m.part_rotation[p];
   parallel_for_each(m.cell_count(), 4096, [&](int c) {
     const Mat3& R = s.body_rotation[m.cell_body[c]];
