@@ -21,7 +21,8 @@ W=0; E=[]
 def arc(rad, a0, a1, m):
     return [(0.0, 5 + rad*math.cos(math.radians(a0 + (a1-a0)*k/m)), 10 + rad*math.sin(math.radians(a0 + (a1-a0)*k/m))) for k in range(m+1)]
 ri, ro = r + 0.3, r + 1.5
-pts = arc(ri, 0, 90, n) + arc(ro, 90, 0, n) + [arc(ri, 0, 90, n)[0]]
+radial = lambda a, r0, r1: [(0.0, 5 + (r0 + (r1-r0)*k/n)*math.cos(math.radians(a)), 10 + (r0 + (r1-r0)*k/n)*math.sin(math.radians(a))) for k in range(1, n)]
+pts = arc(ri, 0, 90, n) + radial(90, ri, ro) + arc(ro, 90, 0, n) + radial(0, ro, ri) + [arc(ri, 0, 90, n)[0]]
 Fs=[]
 for p in pts:
     F,e=ev(p); Fs.append(F); E.append(e)
