@@ -653,7 +653,8 @@ RigidWorld::Penetration RigidWorld::deepest_penetration() const {
 }
 
 void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out, std::vector<double>* face_slip,
-                                 std::vector<std::vector<std::uint8_t>>* stuck) const {
+                                 std::vector<std::vector<std::uint8_t>>* stuck,
+                                 std::vector<double>* partner_speed) const {
   const Impl& m = *impl_;
   out.resize(m.scene.bodies.size());
   for (auto& n : out) n.clear();
@@ -662,6 +663,7 @@ void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out, std::vecto
     for (auto& n : *stuck) n.clear();
   }
   if (face_slip) face_slip->assign(m.scene.bodies.size(), 0.0);
+  if (partner_speed) partner_speed->assign(m.scene.bodies.size(), 0.0);
   btCollisionDispatcher& d = const_cast<btCollisionDispatcher&>(m.dispatcher);
   for (int k = 0; k < d.getNumManifolds(); ++k) {
     const btPersistentManifold* mf = d.getManifoldByIndexInternal(k);
@@ -691,6 +693,16 @@ void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out, std::vecto
         if (a >= 0) (*stuck)[a].push_back(0);
         if (b >= 0) (*stuck)[b].push_back(0);
       }
+    }
+    if (partner_speed && touching > 0) {
+      // Each body's centre against the partner's motion there (static partners: zero motion).
+      auto relative = [](const btRigidBody* self, const btRigidBody* other) {
+        btVector3 v = self ? self->getLinearVelocity() : btVector3(0, 0, 0);
+        if (other && self) v -= other->getVelocityInLocalPoint(self->getCenterOfMassPosition() - other->getCenterOfMassPosition());
+        return static_cast<double>(v.length());
+      };
+      if (a >= 0 && b >= 0 && m.permanent[b]) (*partner_speed)[a] = std::max((*partner_speed)[a], relative(ra, rb));
+      if (a >= 0 && b >= 0 && m.permanent[a]) (*partner_speed)[b] = std::max((*partner_speed)[b], relative(rb, ra));
     }
     if (!face_slip || touching == 0) continue;
     // A face contact (spans_face); anything else is a point or line contact.

@@ -71,9 +71,13 @@ class RigidWorld {
   /// 0.005 s², s the smaller body's smallest extent), i.e. a point or line contact about which
   /// the body can roll or rock freely; 0 without contacts. `stuck` (optional, per body, parallel
   /// to `out`): 1 where the contact is a stuck contact (StuckContacts: the pair is held by a
-  /// joint), else 0.
+  /// joint), else 0. `partner_speed` (optional, per body, m/s): over the body's manifolds with
+  /// such points, the largest speed of its centre of mass relative to its partner (the partner's
+  /// velocity at that point, spin included): a ball rolling over a magnet moves, one resting on
+  /// it does not; 0 without contacts.
   void contact_normals(std::vector<std::vector<Vec3>>& out, std::vector<double>* face_slip = nullptr,
-                       std::vector<std::vector<std::uint8_t>>* stuck = nullptr) const;
+                       std::vector<std::vector<std::uint8_t>>* stuck = nullptr,
+                       std::vector<double>* partner_speed = nullptr) const;
   /// Number of face contacts held by a joint now (StuckContacts).
   int stuck_contacts() const;
   /// Replaces the forces (N) and torques (N·m, about the centre of mass, world frame) of the

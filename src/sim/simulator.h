@@ -127,6 +127,7 @@ class Simulator {
   std::vector<std::uint8_t> contact_exempt_;  // per body: dynamic and without magnetic torque (body_splits)
   std::vector<std::vector<Vec3>> contact_normals_;  // per body, of the last step (refresh_contacts())
   std::vector<double> face_slip_;         // per body: RigidWorld::contact_normals' face_slip, m/s
+  std::vector<double> partner_speed_;     // per body: RigidWorld::contact_normals' partner_speed, m/s
   std::vector<std::vector<std::uint8_t>> contact_stuck_;  // per body, per contact normal: a stuck contact
   std::vector<Vec3> shared_force_, shared_torque_;  // per body: body_splits' forces after RigidWorld::stuck_shares
   std::vector<RigidWorld::Penetration> initial_overlaps_;
