@@ -7,6 +7,7 @@
 #include <random>
 
 #include "magnetics/block_kernel.h"
+#include "magnetics/cuboid.h"
 
 namespace {
 
@@ -44,6 +45,29 @@ void BM_Block(benchmark::State& state, KernelPrecision precision, bool clamp) {
   state.counters["pairs/s"] = benchmark::Counter(double(state.iterations()) * n * n, benchmark::Counter::kIsRate);
 }
 BENCHMARK_CAPTURE(BM_Block, f32, KernelPrecision::kSingle, false)->Arg(32)->Arg(64)->Arg(256);
+
+// The exact near field of two touching 2.5 mm cells (the cells of two 1 cm cube magnets face to
+// face at the default preset), force + torque + energy by cuboid_pair at quadrature order 4:
+// parallel cells, and cells whose bodies have turned by `turn` rad about a skew axis (the
+// magnetizations then carry round-off components along the other axes, which must not cost
+// the four other faces: physics.md §6, bench/results/cuboid_near_2026-12-05).
+void BM_CuboidPair(benchmark::State& state, double turn) {
+  const Mat3 R = Eigen::AngleAxisd(turn, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  const Vec3 half(1.25e-3, 1.25e-3, 1.25e-3);
+  const double M = 1.3 / 4e-7 / 3.141592653589793;  // N42, A/m
+  const Cuboid k{R * Vec3(0.3e-3, 0.2e-3, 2.5e-3), R, half, R * Vec3(0, 0, M)};
+  const Cuboid i{Vec3::Zero(), R, half, R * Vec3(0, 0, M)};
+  Vec3 F, T;
+  double E = 0;
+  for (auto _ : state) {
+    cuboid_pair(k, i, 4, F, T, &E);
+    benchmark::DoNotOptimize(F);
+    benchmark::DoNotOptimize(E);
+  }
+  state.counters["pairs/s"] = benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK_CAPTURE(BM_CuboidPair, aligned, 0.0);
+BENCHMARK_CAPTURE(BM_CuboidPair, turned, 0.3);
 BENCHMARK_CAPTURE(BM_Block, f32_clamped, KernelPrecision::kSingle, true)->Arg(32)->Arg(256);
 BENCHMARK_CAPTURE(BM_Block, f64, KernelPrecision::kDouble, false)->Arg(32)->Arg(256);
 
