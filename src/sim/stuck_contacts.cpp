@@ -28,6 +28,11 @@ constexpr double kFrictionShare = 0.9;
 // friction twist and of its tilting resistance (a square face's corners: the inscribed radius is
 // 0.71 of their mean distance, the mean lever of uniform pressure 0.54; 0.5 stays inside both).
 constexpr double kLeverShare = 0.5;
+// A point or line contact between two permanent magnets (ball magnets) carries no couple of its
+// own: their mutual torque holds them against rolling on each other, with a stiffness of about
+// F_n d / 3 per radian. Held, it may carry the couple that would roll the pair by kRollTolerance
+// (rad) before it found its own equilibrium: its lever is kRollTolerance d / 3.
+constexpr double kRollTolerance = 0.01;
 
 }  // namespace
 
@@ -274,11 +279,12 @@ void StuckContacts::after_step(btDiscreteDynamicsWorld& world, btCollisionDispat
   std::vector<std::pair<std::pair<int, int>, btPersistentManifold*>> candidates;
   for (int k = 0; k < dispatcher.getNumManifolds(); ++k) {
     btPersistentManifold* mf = dispatcher.getManifoldByIndexInternal(k);
-    if (mf->getNumContacts() < 3) continue;
+    if (mf->getNumContacts() < 1) continue;
     const int a = mf->getBody0()->getUserIndex(), b = mf->getBody1()->getUserIndex();
     if (a < 0 || b < 0 || a == b) continue;
     const Body &ba = bodies_[a], &bb = bodies_[b];
     if (!(ba.dynamic || bb.dynamic) || !ba.magnetic || !bb.magnetic || !(ba.permanent || bb.permanent)) continue;
+    if (mf->getNumContacts() < 3 && !(ba.permanent && bb.permanent)) continue;
     if (pieces(mf->getBody0()) || pieces(mf->getBody1())) continue;
     candidates.push_back({{std::min(a, b), std::max(a, b)}, mf});
   }
@@ -294,7 +300,17 @@ void StuckContacts::after_step(btDiscreteDynamicsWorld& world, btCollisionDispat
     Vec3 p[4];
     const int n = touching_points(*mf, p);
     const double size = std::min(ba.extent, bb.extent);
-    if (n < 3 || !spans_face(p, n, size)) continue;
+    if (n < 1) continue;
+    const bool face = n >= 3 && spans_face(p, n, size);
+    if (!face && !(ba.permanent && bb.permanent)) continue;
+    if (!face) {
+      // Rest is not balance: a pair at the turning point of a swing is still, and pulled. Its
+      // relative velocities must also have changed by less than the rest speed over the step.
+      if (last_v_.size() != bodies_.size()) continue;
+      const Vec3 dv = (eig(rb.getLinearVelocity()) - last_v_[b]) - (eig(ra.getLinearVelocity()) - last_v_[a]);
+      const Vec3 dw = (eig(rb.getAngularVelocity()) - last_w_[b]) - (eig(ra.getAngularVelocity()) - last_w_[a]);
+      if ((dv.norm() + 0.5 * size * dw.norm()) * h >= kRestFraction * size) continue;
+    }
     double pressed = 0, slip = 0, depth = 0;
     btVector3 friction(0, 0, 0);  // the contact's friction impulse, N·s
     for (int c = 0; c < mf->getNumContacts(); ++c) {
@@ -323,7 +339,12 @@ void StuckContacts::after_step(btDiscreteDynamicsWorld& world, btCollisionDispat
     joint->mu = mu;
     Vec3 centroid = Vec3::Zero();
     for (int i = 0; i < n; ++i) centroid += p[i] / n;
-    for (int i = 0; i < n; ++i) joint->lever += kLeverShare * (p[i] - centroid).norm() / n;
+    if (face) {
+      for (int i = 0; i < n; ++i) joint->lever += kLeverShare * (p[i] - centroid).norm() / n;
+    } else {
+      const double d = (eig(ra.getCenterOfMassPosition()) - eig(rb.getCenterOfMassPosition())).norm();
+      joint->lever = kRollTolerance * d / 3.0;
+    }
     joint->point = std::make_unique<btPoint2PointConstraint>(ra, rb, ra.getWorldTransform().inverse() * bt(centroid),
                                                              rb.getWorldTransform().inverse() * bt(centroid));
     btTransform at;
@@ -342,6 +363,12 @@ void StuckContacts::after_step(btDiscreteDynamicsWorld& world, btCollisionDispat
     world.addConstraint(joint->turn.get(), true);
     mf->clearManifold();
     joints_.emplace(key, std::move(joint));
+  }
+  last_v_.resize(bodies_.size());
+  last_w_.resize(bodies_.size());
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    last_v_[i] = eig(bodies[i]->getLinearVelocity());
+    last_w_[i] = eig(bodies[i]->getAngularVelocity());
   }
 }
 

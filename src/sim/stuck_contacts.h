@@ -46,7 +46,11 @@ bool spans_face(const Vec3* points, int count, double size);
 /// Joints are made only for a face contact whose points move relative to each other by less
 /// than 1e-3 of the smaller body's smallest extent over the step, and whose friction is below
 /// 90% of its limit, so holding removes at most the kinetic energy of that relative motion and
-/// never adds any.
+/// never adds any. Two permanent magnets in a point or line contact (ball magnets in a chain)
+/// are held the same way when they are also balanced (their relative velocities changed by less
+/// than that over the step: a swing's turning point is still but not balanced); such a contact
+/// carries no couple of its own, and is let go when the couple it holds would roll the pair by
+/// more than 0.01 rad against the magnets' mutual stiffness (about F_n d / 3 per radian).
 class StuckContacts {
  public:
   /// What decides whether a pair may stick, per scene body.
@@ -101,6 +105,7 @@ class StuckContacts {
   static void remove(btDiscreteDynamicsWorld& world, Joint& joint);
   std::vector<Body> bodies_;
   std::vector<Vec3> moved_force_, moved_torque_;  // per body: share()'s change to its force, torque
+  std::vector<Vec3> last_v_, last_w_;  // per body: velocities after the previous step (m/s, rad/s)
   std::map<std::pair<int, int>, std::unique_ptr<Joint>> joints_;  // by (smaller, larger) index
 };
 

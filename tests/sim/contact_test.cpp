@@ -455,6 +455,52 @@ TEST(Contact, ChainOfCubesRestingTakesNoPieces) {
   EXPECT_LT(worst_rise, 1e-4);
 }
 
+// Ball magnets resting in point contacts (issue 11, outcome 2; physics.md §8 item 11): a 3 x 3 x 3
+// block of 5 mm N42 balls on a table, chains along x magnetized +x and -x in a checkerboard (the
+// Zen lattice of bench/run_zen_bench.sh, smaller), dt 1 ms, 0.4 s. Once the block has settled
+// (balanced as well as still) its ball-ball contacts are held by joints: in the last 0.2 s it
+// takes 2 pieces per 1 ms (before: 13, 2600 Bullet steps for 200 nominal), creeps by 0.06 mm
+// (before: 4.5 mm), and gains no energy. The 2 pieces come from the balls' point contacts with the
+// table, where the force guard still counts their whole pull.
+TEST(Contact, BallMagnetsRestingInPointContactsTakeNoPieces) {
+  std::string s = "magbake: 1\nunits: {length: mm, angle: deg}\ntime: {fps: 100, frames: [1, 41], dt: 0.001}\n"
+                  "gravity: [0, 0, -9810]\n"
+                  "materials:\n  N42: {kind: permanent, remanence: 1.3, density: 7500}\n  wood: {kind: none, density: 700}\n"
+                  "bodies:\n"
+                  "  - {name: table, shape: {box: [200, 200, 10]}, material: wood, motion: static, position: [0, 0, -5]}\n";
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      for (int k = 0; k < 3; ++k) {
+        const int sign = (j + k) % 2 == 0 ? 1 : -1;
+        s += "  - {name: b" + std::to_string(i) + std::to_string(j) + std::to_string(k) +
+             ", shape: {sphere: {radius: 2.5}}, material: N42, magnetization: [" + std::to_string(sign) +
+             ", 0, 0], position: [" + std::to_string(5.0 * (i - 1)) + ", " + std::to_string(5.0 * (j - 1)) + ", " +
+             std::to_string(2.5 + 5.0 * k) + "], friction: 0.5}\n";
+      }
+    }
+  }
+  Bake r(s);
+  int late = 0, late_nominal = 0;
+  double lowest = 1e300, worst_rise = 0;
+  std::vector<Vec3> p20;
+  for (int f = 0; f < 40; ++f) {
+    const FrameDiagnostics d = r.sim->advance_frame();
+    if (f >= 20) late += d.substeps, late_nominal += r.scene.steps_per_frame();
+    if (f == 19) p20 = r.sim->state().com_position;
+    if (f >= 2) {
+      lowest = std::min(lowest, d.total_energy());
+      worst_rise = std::max(worst_rise, d.total_energy() - lowest);
+    }
+  }
+  double moved = 0;
+  for (std::size_t i = 1; i < p20.size(); ++i) moved = std::max(moved, (r.sim->state().com_position[i] - p20[i]).norm());
+  std::printf("ball magnets resting: %d Bullet steps in the last 20 frames for %d nominal, moved %.4f mm, energy rise "
+              "%.2e J\n", late, late_nominal, 1e3 * moved, worst_rise);
+  EXPECT_LE(late, 3 * late_nominal);
+  EXPECT_LT(moved, 2e-4);
+  EXPECT_LT(worst_rise, 1e-5);
+}
+
 // Per-island substeps (issue 11, outcome 2; physics.md §8): two cube magnets snapping on a table
 // need short pieces; six wooden blocks resting on the same table 6-10 cm away, and a lone magnet
 // 12 cm away, do not, and are not refined with them. The snapping pair moves exactly as it does
