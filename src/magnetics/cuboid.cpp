@@ -30,8 +30,15 @@ inline double plus_r(double a, double R, double q2) {
   return std::max(q2, 1e-300 * R * R + 1e-300) / (R - a);
 }
 
-// ln(a + R), see plus_r.
-inline double log_plus_r(double a, double R, double q2) { return std::log(plus_r(a, R, q2)); }
+// out[i] = atan2(y[i], x[i]) for n values (n a multiple of 4, arrays 32-byte aligned): libmvec's
+// 4-lane AVX2 atan2 where built for AVX2, scalar libm otherwise (see the note at the top).
+inline void atan2_batch(const double* y, const double* x, double* out, int n) {
+#if defined(__AVX2__)
+  for (int i = 0; i < n; i += 4) _mm256_store_pd(out + i, _ZGVdN4vv_atan2(_mm256_load_pd(y + i), _mm256_load_pd(x + i)));
+#else
+  for (int i = 0; i < n; ++i) out[i] = std::atan2(y[i], x[i]);
+#endif
+}
 
 // sum over the 8 vertices q of P_q ln(arg[3q + k]), P_q = s0 s1 s2 the vertex parity, as the
 // logarithm of one product: vertices q and q + 2^k share the line along axis k and have
@@ -95,13 +102,7 @@ void face_pair_h(const Vec3& half, int w, double Mw, const Vec3& x, Vec3& H, dou
       }
     }
   }
-#if defined(__AVX2__)
-  for (int q = 0; q < 8; q += 4) {
-    _mm256_store_pd(at + q, _ZGVdN4vv_atan2(_mm256_load_pd(at_y + q), _mm256_load_pd(at_x + q)));
-  }
-#else
-  for (int q = 0; q < 8; ++q) at[q] = std::atan2(at_y[q], at_x[q]);
-#endif
+  atan2_batch(at_y, at_x, at, 8);
   for (int f = 0; f < 2; ++f) {
     const double sigma = (2 * f - 1) * Mw;
     const int q = 4 * f;
@@ -244,13 +245,7 @@ Mat3 cuboid_h_tensor(const Vec3& half, const Vec3& x) {
     }
   }
   alignas(32) double at[24];
-#if defined(__AVX2__)
-  for (int i = 0; i < 24; i += 4) {
-    _mm256_store_pd(at + i, _ZGVdN4vv_atan2(_mm256_load_pd(at_y + i), _mm256_load_pd(at_x + i)));
-  }
-#else
-  for (int i = 0; i < 24; ++i) at[i] = std::atan2(at_y[i], at_x[i]);
-#endif
+  atan2_batch(at_y, at_x, at, 24);
   double diag[3] = {0, 0, 0}, logs[3];
   for (int q = 0; q < 8; ++q) {
     const double P = ((q & 1) ? 1.0 : -1.0) * ((q & 2) ? 1.0 : -1.0) * ((q & 4) ? 1.0 : -1.0);
