@@ -168,6 +168,7 @@ void StuckContacts::remove(btDiscreteDynamicsWorld& world, Joint& j) {
 void StuckContacts::clear(btDiscreteDynamicsWorld& world) {
   for (auto& [key, j] : joints_) remove(world, *j);
   joints_.clear();
+  last_v_.clear(), last_w_.clear();  // velocities of another state: no balance test against them
 }
 
 bool StuckContacts::stuck(int a, int b) const {

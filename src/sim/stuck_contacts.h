@@ -89,7 +89,7 @@ class StuckContacts {
   /// bodies by scene index (their user index).
   void after_step(btDiscreteDynamicsWorld& world, btCollisionDispatcher& dispatcher,
                   const std::vector<std::unique_ptr<btRigidBody>>& bodies, double h);
-  /// Removes every joint (a new state was set).
+  /// Removes every joint and forgets the last step's velocities (a new state was set).
   void clear(btDiscreteDynamicsWorld& world);
   /// Appends, per scene body, the contact normal of each of its stuck contacts (world frame,
   /// pushing the body away from its partner) to `out`, and a 1 to `stuck` (optional) beside it.
