@@ -15,6 +15,33 @@ struct Builder {
   const std::vector<double>& r;
   const std::vector<double>& reach;
   BodyTree& t;
+  const std::vector<int>* cluster = nullptr;  // build_over(): items of one cluster stay together
+  std::vector<Vec3> cluster_center;           // (ncluster) mean of its items' centres
+
+  // Splits order[b, e) between clusters when it holds more than one: by the clusters' centres
+  // along the widest axis of those centres, at the cluster boundary nearest the middle. Returns
+  // the split, or -1 when the range is one cluster.
+  int split_clusters(int b, int e) {
+    const std::vector<int>& k = *cluster;
+    bool several = false;
+    for (int q = b + 1; q < e && !several; ++q) several = k[t.order[q]] != k[t.order[b]];
+    if (!several) return -1;
+    Box3 box;
+    for (int q = b; q < e; ++q) box.extend(cluster_center[k[t.order[q]]]);
+    int axis;
+    box.sizes().maxCoeff(&axis);
+    std::sort(t.order.begin() + b, t.order.begin() + e, [&](int x, int y) {
+      const double cx = cluster_center[k[x]][axis], cy = cluster_center[k[y]][axis];
+      return cx < cy || (cx == cy && (k[x] < k[y] || (k[x] == k[y] && x < y)));
+    });
+    const int mid = b + (e - b) / 2;
+    int best = -1;
+    for (int q = b + 1; q < e; ++q) {
+      if (k[t.order[q]] == k[t.order[q - 1]]) continue;
+      if (best < 0 || std::abs(q - mid) < std::abs(best - mid)) best = q;
+    }
+    return best;
+  }
 
   // Node for order[b, e): returns its index; children are allocated as a pair.
   void fill(int n, int b, int e) {
@@ -33,12 +60,15 @@ struct Builder {
       t.leaf_of[t.order[b]] = n;
       return;
     }
-    int axis;
-    box.sizes().maxCoeff(&axis);
-    const int m = b + (e - b) / 2;
-    std::nth_element(t.order.begin() + b, t.order.begin() + m, t.order.begin() + e, [&](int x, int y) {
-      return c[x][axis] < c[y][axis] || (c[x][axis] == c[y][axis] && x < y);
-    });
+    int m = cluster ? split_clusters(b, e) : -1;
+    if (m < 0) {
+      int axis;
+      box.sizes().maxCoeff(&axis);
+      m = b + (e - b) / 2;
+      std::nth_element(t.order.begin() + b, t.order.begin() + m, t.order.begin() + e, [&](int x, int y) {
+        return c[x][axis] < c[y][axis] || (c[x][axis] == c[y][axis] && x < y);
+      });
+    }
     const int k = t.node_count();
     for (int i = 0; i < 2; ++i) {
       t.child.push_back(-1), t.body.push_back(-1), t.begin.push_back(0), t.end.push_back(0);
@@ -69,11 +99,13 @@ void BodyTree::build(const Model& m, const State& s, const std::function<bool(in
   if (order.empty()) return;
   child.push_back(-1), body.push_back(-1), begin.push_back(0), end.push_back(0);
   parent.push_back(-1), center.emplace_back(Vec3::Zero()), radius.push_back(0), reach.push_back(0);
-  Builder{c, r, rch, *this}.fill(0, 0, static_cast<int>(order.size()));
+  Builder{c, r, rch, *this, nullptr, {}}.fill(0, 0, static_cast<int>(order.size()));
 }
 
-void BodyTree::build_over(const std::vector<Vec3>& c, const std::vector<double>& r) {
+void BodyTree::build_over(const std::vector<Vec3>& c, const std::vector<double>& r,
+                          const std::vector<int>& cluster) {
   assert(c.size() == r.size());
+  assert(cluster.empty() || cluster.size() == c.size());
   child.clear(), body.clear(), begin.clear(), end.clear(), parent.clear();
   center.clear(), radius.clear(), reach.clear();
   const int n = static_cast<int>(c.size());
@@ -84,7 +116,18 @@ void BodyTree::build_over(const std::vector<Vec3>& c, const std::vector<double>&
   const std::vector<double> rch(n, 0.0);
   child.push_back(-1), body.push_back(-1), begin.push_back(0), end.push_back(0);
   parent.push_back(-1), center.emplace_back(Vec3::Zero()), radius.push_back(0), reach.push_back(0);
-  Builder{c, r, rch, *this}.fill(0, 0, n);
+  Builder builder{c, r, rch, *this, nullptr, {}};
+  if (!cluster.empty()) {
+    builder.cluster = &cluster;
+    const int nk = *std::max_element(cluster.begin(), cluster.end()) + 1;
+    builder.cluster_center.assign(nk, Vec3::Zero());
+    std::vector<int> count(nk, 0);
+    for (int i = 0; i < n; ++i) builder.cluster_center[cluster[i]] += c[i], ++count[cluster[i]];
+    for (int k = 0; k < nk; ++k) {
+      if (count[k] > 0) builder.cluster_center[k] /= count[k];
+    }
+  }
+  builder.fill(0, 0, n);
 }
 
 void BodyTreeSources::aggregate(const BodyTree& t, const Model& m, const Sources& src) {

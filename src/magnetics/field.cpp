@@ -182,7 +182,8 @@ void dipoles_f32(const std::vector<Source>& src, const std::vector<Vec3>& rel, i
       const __m256 ry = _mm256_sub_ps(Y, _mm256_set1_ps(sy[i]));
       const __m256 rz = _mm256_sub_ps(Z, _mm256_set1_ps(sz[i]));
       const __m256 d2 = _mm256_fmadd_ps(rz, rz, _mm256_fmadd_ps(ry, ry, _mm256_mul_ps(rx, rx)));
-      const __m256 z = two_over_sqrt(d2);  // 2/d
+      // 2/d, 0 where the target sits on the source (a cell's own field is not summed).
+      const __m256 z = _mm256_andnot_ps(_mm256_cmp_ps(d2, _mm256_setzero_ps(), _CMP_EQ_OQ), two_over_sqrt(d2));
       const __m256 z2 = _mm256_mul_ps(z, z);
       const __m256 z5 = _mm256_mul_ps(_mm256_mul_ps(z2, z2), z);  // 32/d^5
       const __m256 bmx = _mm256_set1_ps(mx[i]), bmy = _mm256_set1_ps(my[i]), bmz = _mm256_set1_ps(mz[i]);
@@ -221,7 +222,9 @@ void dipoles_f64(const std::vector<Source>& src, const std::vector<Vec3>& rel, i
       const __m256d ry = _mm256_sub_pd(Y, _mm256_set1_pd(sc.x[1]));
       const __m256d rz = _mm256_sub_pd(Z, _mm256_set1_pd(sc.x[2]));
       const __m256d d2 = _mm256_fmadd_pd(rz, rz, _mm256_fmadd_pd(ry, ry, _mm256_mul_pd(rx, rx)));
-      const __m256d inv = _mm256_div_pd(_mm256_set1_pd(1.0), _mm256_sqrt_pd(d2));
+      // 0 where the target sits on the source (a cell's own field is not summed).
+      const __m256d inv = _mm256_andnot_pd(_mm256_cmp_pd(d2, _mm256_setzero_pd(), _CMP_EQ_OQ),
+                                           _mm256_div_pd(_mm256_set1_pd(1.0), _mm256_sqrt_pd(d2)));
       const __m256d inv2 = _mm256_mul_pd(inv, inv);
       const __m256d inv5 = _mm256_mul_pd(_mm256_mul_pd(inv2, inv2), inv);
       const __m256d bmx = _mm256_set1_pd(sc.m[0]), bmy = _mm256_set1_pd(sc.m[1]), bmz = _mm256_set1_pd(sc.m[2]);
@@ -239,7 +242,9 @@ void dipoles_f64(const std::vector<Source>& src, const std::vector<Vec3>& rel, i
 #else
 void dipoles_f64(const std::vector<Source>& src, const std::vector<Vec3>& rel, int n, Vec3* B) {
   for (int q = 0; q < n; ++q) {
-    for (const Source& s : src) B[q] += dipole_field(rel[q] - s.x, s.m);
+    for (const Source& s : src) {
+      if ((rel[q] - s.x).squaredNorm() > 0.0) B[q] += dipole_field(rel[q] - s.x, s.m);
+    }
   }
 }
 void dipoles_f32(const std::vector<Source>& src, const std::vector<Vec3>& rel, int n, Vec3* B) {
@@ -248,7 +253,9 @@ void dipoles_f32(const std::vector<Source>& src, const std::vector<Vec3>& rel, i
     for (const Source& s : src) {
       const Eigen::Vector3f r = (rel[q] - s.x).cast<float>();
       const Eigen::Vector3f m = s.m.cast<float>();
-      const float d2 = r.squaredNorm(), inv = 1.0f / std::sqrt(d2), inv5 = inv * inv * inv * inv * inv;
+      const float d2 = r.squaredNorm();
+      if (d2 == 0.0f) continue;
+      const float inv = 1.0f / std::sqrt(d2), inv5 = inv * inv * inv * inv * inv;
       acc += inv5 * (3.0f * m.dot(r) * r - d2 * m);
     }
     B[q] += kMu0Over4Pi * acc.cast<double>();
@@ -319,7 +326,13 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
   BodyTreeSources agg;
   agg.aggregate(bt, m, src);
   BodyTree& tt = plan.target_tree;
-  tt.build_over(t.group_center, t.group_radius);
+  // Groups of a body's cells under one node (targets on cells); points grouped by space alone.
+  std::vector<int> group_body;
+  if (t.cell.size() > 0 && t.cell[0] >= 0) {
+    group_body.resize(ngroup);
+    for (int g = 0; g < ngroup; ++g) group_body[g] = m.cell_body[t.cell[t.group_begin[g]]];
+  }
+  tt.build_over(t.group_center, t.group_radius, group_body);
   plan.roots = task_roots(tt);
   const int ntask = static_cast<int>(plan.roots.size());
 
@@ -442,7 +455,11 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
             // Targets that are cells skip themselves: cells of the group's own leaf are decided
             // target by target (a group of induced cells is one leaf, from_induced_cells()).
             const bool self = t.cell[tb] >= 0 && m.node_begin[n] <= t.cell[tb] && t.cell[tb] < m.node_end[n];
-            if (maybe_near || self) {
+            // A cell that apply_field_plan() would take as a plain dipole at every target anyway
+            // (no ball, no cuboid, no smearing) is summed with the far ones; a target on the cell
+            // itself is 0 away from it, which the sums skip.
+            const bool plain = !m.cell_ball[c] && !(opt.near_field > 0.0 && m.cell_full[c]) && !opt.smear_inside;
+            if ((maybe_near || self) && !plain) {
               near[k].push_back(c);
             } else {
               far[k].push_back({FieldPlan::kCell, c});

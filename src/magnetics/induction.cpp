@@ -48,8 +48,9 @@ Mat3 cross_body_tensor(const Model& m, const Settings& st, const State& s, int t
          dipole_tensor(r);
 }
 
-// Rows of near-field corrections for every induced target: the model's rows inside the body
-// (rotated to world) plus rows for cells of other bodies within the same radius.
+// Rows of near-field corrections for every induced target from cells of other bodies within the
+// model's near radius (world frame). The rows inside a body are the model's own (body frame,
+// fixed): add_body_near() applies them without rotating a tensor per substep.
 void build_near_rows(const Model& m, const Settings& st, State& s) {
   const Targets& t = s.induced_targets;
   const int n = static_cast<int>(t.position.size());
@@ -108,10 +109,7 @@ void build_near_rows(const Model& m, const Settings& st, State& s) {
       }
     }
   });
-  for (int q = 0; q < n; ++q) {
-    const int r = t.original[q];
-    rows.begin[q + 1] = rows.begin[q] + (m.near_begin[r + 1] - m.near_begin[r]) + static_cast<int>(cross[q].size());
-  }
+  for (int q = 0; q < n; ++q) rows.begin[q + 1] = rows.begin[q] + static_cast<int>(cross[q].size());
   rows.cell.resize(rows.begin[n]);
   rows.tensor.resize(rows.begin[n]);
 
@@ -160,14 +158,9 @@ void build_near_rows(const Model& m, const Settings& st, State& s) {
         computed[k];
   }
   parallel_for_each(n, 8, [&](int q) {
-    const int r = t.original[q];
     const int tc = t.cell[q];
     const Mat3& R = s.body_rotation[m.cell_body[tc]];
     int e = rows.begin[q];
-    for (int k = m.near_begin[r]; k < m.near_begin[r + 1]; ++k, ++e) {
-      rows.cell[e] = m.near_cell[k];
-      rows.tensor[e] = R * m.near_tensor[k] * R.transpose();
-    }
     for (int c : cross[q]) {
       const auto& pt = s.cross_tensors.at({m.cell_body[tc], m.cell_body[c]});
       rows.cell[e] = c;
@@ -175,6 +168,32 @@ void build_near_rows(const Model& m, const Settings& st, State& s) {
       ++e;
     }
   });
+}
+
+// Moments of the cells that near rows inside a body read (Model::near_cell), in their body's
+// frame: local[c] = R_b^T world[c]. Other entries are left as they are.
+void to_body_frame(const Model& m, const State& s, const std::vector<Vec3>& world, std::vector<Vec3>& local) {
+  local.resize(world.size());
+  parallel_for_each(m.body_count, 16, [&](int b) {
+    const Mat3 Rt = s.body_rotation[b].transpose();
+    for (int c = m.body_cell_begin[b]; c < m.body_cell_begin[b + 1]; ++c) local[c] = Rt * world[c];
+  });
+}
+
+// Near-field corrections inside the body of target q (rank r among the induced cells) from
+// moments in body frames (to_body_frame()), added to the world-frame field Bq. Entries whose
+// source part `skip` rejects are left out.
+template <class Skip>
+void add_body_near(const Model& m, const State& s, int q, const Targets& t, const std::vector<Vec3>& local,
+                   Skip skip, Vec3& Bq) {
+  const int r = t.original[q];
+  Vec3 sum = Vec3::Zero();
+  for (int k = m.near_begin[r]; k < m.near_begin[r + 1]; ++k) {
+    const int c = m.near_cell[k];
+    if (skip(m.cell_part[c])) continue;
+    sum += m.near_tensor[k] * local[c];
+  }
+  Bq += s.body_rotation[m.cell_body[t.cell[q]]] * sum;
 }
 
 }  // namespace
@@ -218,13 +237,17 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
   stats.field_pairs += apply_field_plan(pplan, m, s, s.permanent, t, popt, B);
   Vector b(3 * n);
   std::vector<Vec3> B0(n);  // field of the fixed sources at each target
+  std::vector<Vec3> local;  // moments in body frames (add_body_near())
+  to_body_frame(m, s, s.permanent.cell, local);
   // Per target group in parallel: each writes only its own targets' B0 and b.
   parallel_for_each(static_cast<int>(t.group_begin.size()) - 1, 4, [&](int g) {
     const auto s0 = pplan.surface.begin() + pplan.surface_begin[g], s1 = pplan.surface.begin() + pplan.surface_end[g];
+    auto skip = [&](int part) { return s0 != s1 && std::find(s0, s1, part) != s1; };
     for (int q = t.group_begin[g]; q < t.group_begin[g + 1]; ++q) {
       Vec3 Bq = B[q] + st.external_field;
+      add_body_near(m, s, q, t, local, skip, Bq);
       for (int e = rows.begin[q]; e < rows.begin[q + 1]; ++e) {
-        if (s0 != s1 && std::find(s0, s1, m.cell_part[rows.cell[e]]) != s1) continue;
+        if (skip(m.cell_part[rows.cell[e]])) continue;
         Bq += rows.tensor[e] * s.permanent.cell[rows.cell[e]];
       }
       B0[q] = Bq;
@@ -266,9 +289,11 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
   auto apply = [&](const Vector& x, Vector& y) {
     load(x);
     stats.field_pairs += apply_field_plan(plan, m, s, s.induced, t, fopt, B);
+    to_body_frame(m, s, s.induced.cell, local);
     y.resize(3 * n);
     parallel_for_each(n, 256, [&](int q) {  // each target writes only its own rows of y
       Vec3 Bq = B[q];
+      add_body_near(m, s, q, t, local, [](int) { return false; }, Bq);
       for (int e = rows.begin[q]; e < rows.begin[q + 1]; ++e) Bq += rows.tensor[e] * s.induced.cell[rows.cell[e]];
       y.segment<3>(3 * q) = x.segment<3>(3 * q) - alpha[q] * Bq;
     });
@@ -350,6 +375,12 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
     for (int i = 0; i < j; ++i) u += y[i] * V[i];
     apply_precond(u, z);
     x += z;
+    // Converged by GMRES's own residual (|g[j]| is |b - A x| of the updated x, up to round-off):
+    // no application to confirm it. Otherwise the restart needs the residual anyway.
+    if (std::abs(g[j]) / bnorm <= st.induction_tolerance) {
+      rep.residual = std::abs(g[j]) / bnorm;
+      break;
+    }
     apply(x, r);
     r = b - r;
     beta = std::sqrt(dot(r, r));

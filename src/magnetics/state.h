@@ -117,8 +117,10 @@ struct State {
   Sources induced;                    ///< induced moments only (induction operator)
   Targets induced_targets;            ///< the induced cells as field targets
 
-  /// Near-field corrections of the induction operator, rows = induced targets (target order):
-  /// B_mean(target) - B_dipole(target) = tensor * m(source cell), world frame, T/(A·m²).
+  /// Near-field corrections of the induction operator from cells of other bodies, rows =
+  /// induced targets (target order): B_mean(target) - B_dipole(target) = tensor * m(source
+  /// cell), world frame, T/(A·m²). Corrections inside a body are the model's (Model::near_tensor,
+  /// body frame), applied to the moments rotated into that frame.
   struct NearRows {
     std::vector<int> begin;            ///< (ntarget + 1)
     std::vector<int> cell;             ///< source cell of each entry

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <random>
 
 #include "magnetics/body_tree.h"
@@ -140,7 +141,8 @@ TEST(DualFieldWalk, MatchesEveryCellAndIsLinearInTheMoments) {
   for (std::size_t q = 0; q < B.size(); ++q) num += (B[q] - B0[q]).squaredNorm(), den += B0[q].squaredNorm();
   std::printf("1000 bodies, %zu steel cells: rms field error %.2e at theta 0.5, %lld of %lld pair evaluations\n",
               B.size(), std::sqrt(num / den), (long long)work, (long long)work0);
-  // Measured 8.4e-3 with 7.1e6 of 2.0e9 evaluations with the magnet spheres cut into cells; the
+  // Measured 8.5e-3 with 3.4e6 of 1.04e9 evaluations (2026-12-06: each body's target groups one
+  // subtree, kLocalTheta 0.35); before, 8.4e-3 with 7.1e6 of 2.0e9 evaluations with the magnet spheres cut into cells; the
   // walk before the local expansions (every target group summing every far aggregate itself) gave
   // 4.8e-3 with 2.9e7, and the same forces (BodyTree.ForcesOfManyBodiesMatchEveryCellPair: 0.38%
   // against 0.37% rms from theta 0). With the magnets one exact cell each (exact_balls): 8.8e-3
@@ -170,6 +172,72 @@ TEST(DualFieldWalk, MatchesEveryCellAndIsLinearInTheMoments) {
     scale = std::max(scale, Bz[q].norm());
   }
   EXPECT_LT(lin, 1e-12 * scale);
+}
+
+// The hierarchy over target groups keeps each body's groups in one subtree (build_over() with
+// clusters), whatever the order and spacing of the groups: the smallest node holding a body's
+// groups holds no other body's. Then a body's far neighbours reach all its cells as one
+// local expansion.
+TEST(BodyTree, TargetGroupsOfOneBodyShareOneSubtree) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Vec3> c;
+  std::vector<double> r;
+  std::vector<int> body;
+  // 300 bodies of 1-7 groups on a jittered 8 mm lattice, groups within 2 mm of their body's
+  // centre, listed in shuffled order.
+  for (int b = 0; b < 300; ++b) {
+    const Vec3 centre = 0.008 * Vec3(b % 7, (b / 7) % 7, b / 49) + 0.0005 * Vec3(u(rng), u(rng), u(rng));
+    const int ng = 1 + b % 7;
+    for (int g = 0; g < ng; ++g) {
+      c.push_back(centre + 0.002 * Vec3(u(rng), u(rng), u(rng)));
+      r.push_back(0.001);
+      body.push_back(b);
+    }
+  }
+  std::vector<int> perm(c.size());
+  std::iota(perm.begin(), perm.end(), 0);
+  std::shuffle(perm.begin(), perm.end(), rng);
+  std::vector<Vec3> cs;
+  std::vector<double> rs;
+  std::vector<int> bs;
+  for (int i : perm) cs.push_back(c[i]), rs.push_back(r[i]), bs.push_back(body[i]);
+  BodyTree t;
+  t.build_over(cs, rs, bs);
+  ASSERT_EQ(static_cast<std::size_t>(t.order.size()), cs.size());
+  std::vector<int> count(300, 0);
+  for (int b : bs) ++count[b];
+  for (int b = 0; b < 300; ++b) {
+    // The lowest common ancestor of the body's leaves spans exactly its groups.
+    int n = -1;
+    for (std::size_t i = 0; i < bs.size(); ++i) {
+      if (bs[i] != b) continue;
+      int x = t.leaf_of[i];
+      if (n < 0) {
+        n = x;
+        continue;
+      }
+      std::vector<int> up;
+      for (int y = n; y >= 0; y = t.parent[y]) up.push_back(y);
+      while (std::find(up.begin(), up.end(), x) == up.end()) x = t.parent[x];
+      n = x;
+    }
+    ASSERT_GE(n, 0);
+    EXPECT_EQ(t.end[n] - t.begin[n], count[b]) << "body " << b;
+    for (int q = t.begin[n]; q < t.end[n]; ++q) EXPECT_EQ(bs[t.order[q]], b);
+  }
+  // Without clusters the same groups are split by count alone and bodies are cut apart.
+  BodyTree plain;
+  plain.build_over(cs, rs);
+  int cut = 0;
+  for (int n = 0; n < plain.node_count(); ++n) {
+    if (plain.child[n] < 0) continue;
+    const int k = plain.child[n];
+    for (int a = plain.begin[k]; a < plain.end[k]; ++a) {
+      for (int q = plain.begin[k + 1]; q < plain.end[k + 1]; ++q) cut += bs[plain.order[a]] == bs[plain.order[q]];
+    }
+  }
+  EXPECT_GT(cut, 0) << "the test should hold bodies that a plain median split cuts";
 }
 
 // Groups far apart: a cluster of magnets and one far away, where the tree aggregates whole
