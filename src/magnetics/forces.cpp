@@ -245,16 +245,32 @@ double permanent_pair_energy(const Model& m, const State& s, int ba, int bb, con
 // One side of a walk between hierarchies over bodies: the tree, its moment sums, and the field
 // and gradient its nodes feel from far groups of the other side.
 // Field and gradient sums per tree node of one side (one task's share, or the sides' own).
+// A task's sums cover only a window [base, base + size) of node indices: the subtree under the
+// task's node on that side (BodyTree allocates every subtree's nodes contiguously after its root's
+// children), so tasks need no tree-sized arrays.
 struct NodeSums {
+  int base = 0;
   std::vector<Vec3> b;
   std::vector<Mat3> g;
   std::vector<std::uint8_t> has;
-  void reset(int n) {
+  void reset(int n, int first = 0) {
+    base = first;
     b.assign(n, Vec3::Zero());
     g.assign(n, Mat3::Zero());
     has.assign(n, 0);
   }
+  void add(int n, const Vec3& field, const Mat3& grad) {
+    b[n - base] += field, g[n - base] += grad, has[n - base] = 1;
+  }
 };
+
+// Largest node index in the subtree of each node (BodyTree: children follow their parent, and a
+// subtree's nodes are allocated together).
+std::vector<int> subtree_last(const BodyTree& t) {
+  std::vector<int> last(t.node_count());
+  for (int n = t.node_count() - 1; n >= 0; --n) last[n] = t.child[n] < 0 ? n : last[t.child[n] + 1];
+  return last;
+}
 
 struct TreeSide {
   const BodyTree& tree;
@@ -271,7 +287,7 @@ struct TreeSide {
 // pairs left for the cell walk (in the walk's order).
 struct WalkSink {
   NodeSums* a = nullptr;  // tree A's side
-  NodeSums* b = nullptr;  // tree B's side (the same object when A is B)
+  NodeSums* b = nullptr;  // tree B's side (the same object when A is B, except in tasks)
   double energy = 0;
   std::int64_t node_pairs = 0;
   std::vector<std::pair<int, int>> pairs;
@@ -279,7 +295,7 @@ struct WalkSink {
 
 // Number of subtrees of the body-tree walk handed to parallel tasks. Fixed (not the thread
 // count), so the split, and with it every sum's order, is the same for any number of threads.
-constexpr std::size_t kWalkTasks = 16;
+constexpr std::size_t kWalkTasks = 64;
 
 // Walks tree A against tree B (A against itself when `same`). Groups of bodies that are well
 // separated interact as the dipole pair of their summed moments at their centres: each member
@@ -289,9 +305,9 @@ constexpr std::size_t kWalkTasks = 16;
 // momentum are conserved to round-off, and the error is of order theta like any aggregate).
 // The field and gradient a group feels are summed per tree node (hand_down() passes them to the
 // members). Body pairs that are not well separated are appended to `pairs` for the cell walk.
-// The walk is depth-first; once kWalkTasks node pairs are pending, each pending pair's subtree
-// of the walk is a task that sums into its own NodeSums, added to the sides' in the walk's
-// order afterwards (the body pairs come out in the serial walk's order).
+// The top of the walk expands the largest pending pair until kWalkTasks pairs are pending; each
+// pending pair's subtree of the walk is then a task that sums into its own NodeSums windows,
+// added to the sides' in task order afterwards (the body pairs come out in task order).
 void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result& res,
                 std::vector<std::pair<int, int>>& pairs) {
   const BodyTree &ta = A.tree, &tb = B.tree;
@@ -321,9 +337,9 @@ void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result&
       Vec3 field;
       Mat3 grad;
       dipole_field_gradient(r, B.total.moment[y], field, grad);
-      sink.a->b[x] += field, sink.a->g[x] += grad, sink.a->has[x] = 1;
+      sink.a->add(x, field, grad);
       dipole_field_gradient(-r, A.total.moment[x], field, grad);
-      sink.b->b[y] += field, sink.b->g[y] += grad, sink.b->has[y] = 1;
+      sink.b->add(y, field, grad);
       sink.energy -= A.permanent.moment[x].dot(dipole_field(r, B.permanent.moment[y]));
       ++sink.node_pairs;
       return;
@@ -344,29 +360,44 @@ void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result&
     res.stats.node_pairs += sink.node_pairs;
     pairs.insert(pairs.end(), sink.pairs.begin(), sink.pairs.end());
   };
-  // The top of the walk, serially into the sides' own sums.
-  std::vector<std::pair<int, int>> stack{{0, 0}};
+  // The top of the walk, serially into the sides' own sums: the pending pair over the most body
+  // pairs is visited next (its children take its place, in visiting order) until there are
+  // kWalkTasks pending pairs, so the tasks are of similar size. The split depends on the trees
+  // alone, not on the thread count.
+  std::vector<std::pair<int, int>> pending{{0, 0}};
   {
     WalkSink top;
     top.a = &A.local, top.b = &B.local;
-    while (!stack.empty() && stack.size() < kWalkTasks) {
-      const auto [x, y] = stack.back();
-      stack.pop_back();
-      visit(x, y, stack, top);
+    std::vector<std::pair<int, int>> kids;
+    while (!pending.empty() && pending.size() < kWalkTasks) {
+      std::size_t best = 0;
+      std::int64_t most = -1;
+      for (std::size_t i = 0; i < pending.size(); ++i) {
+        const auto [x, y] = pending[i];
+        const std::int64_t w = std::int64_t(ta.end[x] - ta.begin[x]) * (tb.end[y] - tb.begin[y]);
+        if (w > most) most = w, best = i;
+      }
+      const auto [x, y] = pending[best];
+      pending.erase(pending.begin() + best);
+      kids.clear();
+      visit(x, y, kids, top);  // pushed for a stack: the last is visited first
+      pending.insert(pending.begin() + best, kids.rbegin(), kids.rend());
     }
     finish(top);
   }
-  if (stack.empty()) return;
-  // The pending pairs' subtrees, the top of the stack first (the serial walk's order).
-  const int ntask = static_cast<int>(stack.size());
-  const int na = ta.node_count(), nb = tb.node_count();
-  std::vector<NodeSums> sa(ntask), sb(same ? 0 : ntask);
+  if (pending.empty()) return;
+  // The pending pairs' subtrees in order, each summing into windows over its own subtrees.
+  const int ntask = static_cast<int>(pending.size());
+  const std::vector<int> last_a = subtree_last(ta), last_b = same ? std::vector<int>() : subtree_last(tb);
+  const std::vector<int>& lb = same ? last_a : last_b;
+  std::vector<NodeSums> sa(ntask), sb(ntask);
   std::vector<WalkSink> sinks(ntask);
   parallel_for_each(ntask, 1, [&](int k) {
-    sa[k].reset(na);
-    if (!same) sb[k].reset(nb);
-    sinks[k].a = &sa[k], sinks[k].b = same ? &sa[k] : &sb[k];
-    std::vector<std::pair<int, int>> local{stack[ntask - 1 - k]};
+    const auto [x0, y0] = pending[k];
+    sa[k].reset(last_a[x0] - x0 + 1, x0);
+    sb[k].reset(lb[y0] - y0 + 1, y0);
+    sinks[k].a = &sa[k], sinks[k].b = &sb[k];
+    std::vector<std::pair<int, int>> local{pending[k]};
     while (!local.empty()) {
       const auto [x, y] = local.back();
       local.pop_back();
@@ -374,14 +405,15 @@ void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result&
     }
   });
   auto add = [](TreeSide& side, const NodeSums& part) {
-    for (std::size_t n = 0; n < part.has.size(); ++n) {
-      if (!part.has[n]) continue;
-      side.local.b[n] += part.b[n], side.local.g[n] += part.g[n], side.local.has[n] = 1;
+    for (std::size_t i = 0; i < part.has.size(); ++i) {
+      if (!part.has[i]) continue;
+      const int n = part.base + static_cast<int>(i);
+      side.local.b[n] += part.b[i], side.local.g[n] += part.g[i], side.local.has[n] = 1;
     }
   };
   for (int k = 0; k < ntask; ++k) {
     add(A, sa[k]);
-    if (!same) add(B, sb[k]);
+    add(same ? A : B, sb[k]);
     finish(sinks[k]);
   }
 }
