@@ -170,8 +170,8 @@ void build_near_rows(const Model& m, const Settings& st, State& s) {
   });
 }
 
-// Moments of the cells that near rows inside a body read (Model::near_cell), in their body's
-// frame: local[c] = R_b^T world[c]. Other entries are left as they are.
+// Every cell's moment in its body's frame, local[c] = R_b^T world[c]: what the near rows inside
+// a body (Model::near_tensor, body frame) multiply.
 void to_body_frame(const Model& m, const State& s, const std::vector<Vec3>& world, std::vector<Vec3>& local) {
   local.resize(world.size());
   parallel_for_each(m.body_count, 16, [&](int b) {
