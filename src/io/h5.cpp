@@ -1,5 +1,6 @@
 #include "h5.h"
 
+#include <algorithm>
 #include <cstring>
 
 namespace magbake::io::h5 {
@@ -95,13 +96,30 @@ void attr_int(hid_t obj, const std::string& name, const std::vector<std::int64_t
 }
 
 namespace {
+// Fixed arrays of at least this many elements are chunked and compressed (write_any).
+constexpr hsize_t kCompressFrom = 1 << 16;
+// Elements per chunk of those arrays (1 MB of float64).
+constexpr hsize_t kChunkElements = 1 << 17;
+
 void write_any(hid_t parent, const std::string& name, const std::vector<hsize_t>& shape, hid_t file_type,
                hid_t mem_type, const void* data, const std::string& unit) {
   Handle space(H5Screate_simple(int(shape.size()), shape.data(), nullptr));
-  Handle d(check_id(H5Dcreate2(parent, name.c_str(), file_type, space.id(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-                    "create dataset " + name));
   hsize_t total = 1;
   for (hsize_t s : shape) total *= s;
+  // Large arrays (a shot's tessellated geometry: 1000 spheres are 80 MB raw, mostly repeats of
+  // one mesh) are stored in chunks of about 1 MB with shuffle + deflate, which every HDF5 reader
+  // undoes transparently; small ones stay contiguous.
+  Handle plist(H5Pcreate(H5P_DATASET_CREATE));
+  if (total >= kCompressFrom && !shape.empty()) {
+    std::vector<hsize_t> chunk = shape;
+    const hsize_t row = total / shape[0];
+    chunk[0] = std::clamp<hsize_t>(kChunkElements / std::max<hsize_t>(row, 1), 1, shape[0]);
+    check(H5Pset_chunk(plist.id(), int(chunk.size()), chunk.data()), "chunk " + name);
+    check(H5Pset_shuffle(plist.id()), "shuffle " + name);
+    check(H5Pset_deflate(plist.id(), 1), "deflate " + name);
+  }
+  Handle d(check_id(H5Dcreate2(parent, name.c_str(), file_type, space.id(), H5P_DEFAULT, plist.id(), H5P_DEFAULT),
+                    "create dataset " + name));
   if (total > 0) check(H5Dwrite(d.id(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), "write " + name);
   if (!unit.empty()) attr_string(d.id(), "unit", unit);
 }
