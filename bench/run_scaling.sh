@@ -7,7 +7,10 @@
 # OUT/scaling.md and OUT/scaling.png (log axes, with N^1 and N^1.2 guides).
 #
 # Usage: bench/run_scaling.sh [BUILD] [OUT] [N ...]     (default: build bench/results/scaling 100 300 1000 3000 10000)
-#   FRAMES=1 (default) ms simulated per N; THREADS=2.
+#   FRAMES=1 (default) ms simulated per N, at least 5 below N = 1000 (one ms of 100 bodies is 9
+#   substeps and 50 ms of work, mostly warm-up: 15% run-to-run noise); THREADS=2; REPEAT=3 bakes per row for N <= 1000 (the
+#   row is the one with the median magnetics time: small shots take well under a second, and
+#   one run's noise moved the N^x exponent by 0.02).
 #   BASELINE=path/to/other/magbake: also bakes each N up to BASELINE_MAX_N (default 1000) with
 #   that binary right after this build's bake (side by side, same load), rows marked "baseline".
 set -euo pipefail
@@ -31,12 +34,14 @@ echo "build,n,threads,substeps,magnetics_ms_per_substep,rigid_ms_per_substep,ind
 
 run() {  # n threads [binary label]
   local n=$1 t=$2 exe=${3:-$build/bake/magbake} label=${4:-this}
-  python3 "$here/make_scaling_scene.py" "$tmp/s$n.yaml" "$n" "$frames"
+  local f=$frames
+  [ "$n" -lt 1000 ] && [ "$f" -lt 5 ] && f=5
+  python3 "$here/make_scaling_scene.py" "$tmp/s$n.yaml" "$n" "$f"
   rm -rf "$tmp/o"
   /usr/bin/time -f "%M %e" -o "$tmp/time" "$exe" -q --threads "$t" bake "$tmp/s$n.yaml" -o "$tmp/o" \
     > "$tmp/log" 2>&1 || { echo "bake of N=$n failed:"; tail -5 "$tmp/log"; exit 1; }
   read -r rss wall < "$tmp/time"
-  /usr/bin/python3 - "$tmp/o/scaling_$n.h5" "$n" "$t" "$rss" "$wall" "$label" >> "$csv" <<'PY'
+  /usr/bin/python3 - "$tmp/o/scaling_$n.h5" "$n" "$t" "$rss" "$wall" "$label" >> "$tmp/rows" <<'PY'
 import sys, h5py
 path, n, t, rss, wall, label = sys.argv[1:]
 o = h5py.File(path, "r")["observables"]
@@ -46,14 +51,22 @@ rbd = o["rigid_seconds"]["value"][1:].sum()
 ind = o["induction_iterations"]["value"][1:].sum()
 print(f"{label},{n},{t},{int(sub)},{1e3 * mag / sub:.3f},{1e3 * rbd / sub:.3f},{ind / sub:.2f},{int(rss) / 1024:.0f},{float(wall):.1f}")
 PY
+}
+
+row() {  # n threads [binary label]: one row, the median of REPEAT bakes for small N
+  local reps=1
+  [ "$1" -le 1000 ] && reps=${REPEAT:-3}
+  : > "$tmp/rows"
+  for _ in $(seq "$reps"); do run "$@"; done
+  sort -t, -k5 -g "$tmp/rows" | sed -n "$(( (reps + 1) / 2 ))p" >> "$csv"
   tail -1 "$csv"
 }
 
 for n in "${sizes[@]}"; do
-  run "$n" "$threads"
-  if [ -n "${BASELINE:-}" ] && [ "$n" -le "${BASELINE_MAX_N:-1000}" ]; then run "$n" "$threads" "$BASELINE" baseline; fi
+  row "$n" "$threads"
+  if [ -n "${BASELINE:-}" ] && [ "$n" -le "${BASELINE_MAX_N:-1000}" ]; then row "$n" "$threads" "$BASELINE" baseline; fi
 done
-run 1000 1
+row 1000 1
 
 /usr/bin/python3 - "$csv" "$out" <<'PY'
 import csv, math, sys
@@ -71,6 +84,11 @@ def slope(key):
     if len(pts) < 2: return float("nan")
     (x0, y0), (x1, y1) = pts[0], pts[-1]
     return (y1 - y0) / (x1 - x0)
+def fit(key):  # least-squares slope of log cost against log N over every size
+    pts = [(math.log(float(r["n"])), math.log(float(r[key]))) for r in main if float(r[key]) > 0]
+    if len(pts) < 2: return float("nan")
+    mx, my = sum(x for x, _ in pts) / len(pts), sum(y for _, y in pts) / len(pts)
+    return sum((x - mx) * (y - my) for x, y in pts) / sum((x - mx) ** 2 for x, _ in pts)
 with open(f"{out}/scaling.md", "w") as f:
     f.write(open(f"{out}/machine.txt").read() + "\n")
     f.write("| build | N | threads | substeps | magnetics ms / substep | rigid ms / substep | induction iterations / substep | peak memory MB | wall s |\n")
@@ -80,6 +98,8 @@ with open(f"{out}/scaling.md", "w") as f:
                 f"{r['induction_iterations_per_substep']} | {r['peak_rss_mb']} | {r['wall_s']} |\n")
     f.write(f"\nExponent from the smallest to the largest N: magnetics N^{slope('magnetics_ms_per_substep'):.2f}, "
             f"rigid N^{slope('rigid_ms_per_substep'):.2f}, memory N^{slope('peak_rss_mb'):.2f}.\n")
+    f.write(f"Least-squares exponent over every N: magnetics N^{fit('magnetics_ms_per_substep'):.2f}, "
+            f"rigid N^{fit('rigid_ms_per_substep'):.2f}.\n")
     two = [r for r in main if r["n"] == "1000"]
     if one and two:
         a, b = float(one[0]["magnetics_ms_per_substep"]) + float(one[0]["rigid_ms_per_substep"]), \

@@ -32,6 +32,28 @@ inline void dipole_field_gradient(const Vec3& r, const Vec3& m, Vec3& B, Mat3& G
        5.0 * inv2 * q * r.transpose());
 }
 
+/// Fields and gradients that two point dipoles put on each other, sharing one distance
+/// evaluation: dipole a (moment m_a at x_a) feels B_a, G_a from dipole b (moment m_b at x_b), and
+/// b feels B_b, G_b from a, with r = x_a - x_b (non-zero). The same values as
+/// dipole_field_gradient(r, m_b) and dipole_field_gradient(-r, m_a) up to rounding: with
+/// mu = m.r, G(r, m) = k/d^5 [3 (r m^T + m r^T) + mu (3 I - 15 r r^T / d^2)], odd in r.
+inline void dipole_mutual_fields(const Vec3& r, const Vec3& m_a, const Vec3& m_b, Vec3& B_a, Mat3& G_a, Vec3& B_b,
+                                 Mat3& G_b) {
+  const double d2 = r.squaredNorm();
+  const double inv = 1.0 / std::sqrt(d2);
+  const double inv2 = inv * inv;
+  const double k5 = kMu0Over4Pi * inv2 * inv2 * inv;
+  const double mu_a = m_a.dot(r), mu_b = m_b.dot(r);
+  B_a = k5 * (3.0 * mu_b * r - d2 * m_b);
+  B_b = k5 * (3.0 * mu_a * r - d2 * m_a);
+  // The radial part 3 I - 15 r r^T / d^2, shared by both gradients.
+  Mat3 radial = (-15.0 * inv2) * (r * r.transpose());
+  radial.diagonal().array() += 3.0;
+  const Mat3 rb = r * m_b.transpose(), ra = r * m_a.transpose();
+  G_a = k5 * (3.0 * (rb + rb.transpose()) + mu_b * radial);
+  G_b = -k5 * (3.0 * (ra + ra.transpose()) + mu_a * radial);
+}
+
 /// Interaction of two point dipoles: the force and torque on dipole k (moment m_k at x_k) due to
 /// dipole i (moment m_i at x_i), r = x_k - x_i. The torque is about x_k. Energy U = -m_k·B_i(x_k).
 /// Dipole i feels F_i = -F_k and T_i = -(T_k + r × F_k) (momentum conservation, physics-notes §2).

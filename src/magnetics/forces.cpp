@@ -334,12 +334,11 @@ void walk_trees(TreeSide& A, TreeSide& B, bool same, const Settings& st, Result&
     if (well_separated(d, ta.radius[x], tb.radius[y], A.total.open_radius[x], B.total.open_radius[y], theta,
                        st.near_field, ta.reach[x] + tb.reach[y]) &&
         spread_ok(A.total.spread[x], B.total.spread[y], theta, d)) {
-      Vec3 field;
-      Mat3 grad;
-      dipole_field_gradient(r, B.total.moment[y], field, grad);
-      sink.a->add(x, field, grad);
-      dipole_field_gradient(-r, A.total.moment[x], field, grad);
-      sink.b->add(y, field, grad);
+      Vec3 ba, bb;
+      Mat3 ga, gb;
+      dipole_mutual_fields(r, A.total.moment[x], B.total.moment[y], ba, ga, bb, gb);
+      sink.a->add(x, ba, ga);
+      sink.b->add(y, bb, gb);
       sink.energy -= A.permanent.moment[x].dot(dipole_field(r, B.permanent.moment[y]));
       ++sink.node_pairs;
       return;
@@ -464,11 +463,11 @@ void body_forces(const Model& m, const Settings& st, const State& s, const BodyT
   }
   res.stats.body_pairs += static_cast<std::int64_t>(pairs.size());
 
-  // Dual-tree walk of every pair: refine where close, aggregate where far (serial, so the list
-  // and hence the summation order never depend on the thread count).
+  // Dual-tree walk of every pair: refine where close, aggregate where far (in chunks of pairs
+  // joined in pair order, so the list and hence the summation order never depend on the thread
+  // count).
   std::vector<Interaction> list;
   std::vector<Walk> all_walks;  // every walk, for the filters of its mixed blocks
-  std::vector<std::pair<int, int>> stack;
   std::vector<PairSurfaces> psurf(pairs.size());
   // Energy: a pair's own when both bodies are purely permanent; pairs with induced cells get
   // theirs from the induction solve (-1/2 m_ind.B_0), plus the permanent-permanent part of
@@ -477,11 +476,17 @@ void body_forces(const Model& m, const Settings& st, const State& s, const BodyT
   auto mixed_permanent_pair = [&](int ba, int bb) {
     return induced_on && (m.body_induced[ba] || m.body_induced[bb]) && m.body_permanent[ba] && m.body_permanent[bb];
   };
-  std::vector<Walk> walks;
+  // The interaction list of one chunk of body pairs: its interactions and walks (an
+  // interaction's `walk` indexes the chunk's walks until the chunks are joined).
+  struct Chunk {
+    std::vector<Interaction> list;
+    std::vector<Walk> walks;
+  };
   // The leaves of body y (from node n down) that open surface part p of body x get the surface
   // (an interaction each; their cells marked in `mark`); farther subtrees get a walk against
   // the part's cells (filters fx on x's side, fy on y's).
-  auto split = [&](int pair, int p, int x, int y, bool y_is_b, const Filter& fy, std::vector<std::uint8_t>* mark) {
+  auto split = [&](Chunk& out, std::vector<Walk>& walks, int pair, int p, int x, int y, bool y_is_b, const Filter& fy,
+                   std::vector<std::uint8_t>* mark) {
     int stk[128], top = 0;
     stk[top++] = m.body_root[y];
     Filter fx;
@@ -499,71 +504,89 @@ void body_forces(const Model& m, const Settings& st, const State& s, const BodyT
         for (int c = ch + m.node_nchild[n] - 1; c >= ch; --c) stk[top++] = c;
         continue;
       }
-      list.push_back({pair, p, n, y_is_b ? kSurfaceOnB : kSurfaceOnA});
+      out.list.push_back({pair, p, n, y_is_b ? kSurfaceOnB : kSurfaceOnA});
       if (mark) {
         for (int c = m.node_begin[n]; c < m.node_end[n]; ++c) (*mark)[c - m.body_cell_begin[y]] = 1;
       }
     }
   };
-  for (int p = 0; p < static_cast<int>(pairs.size()); ++p) {
-    const auto [ba, bb] = pairs[p];
-    const Vec3 delta = s.body_pose[ba].position - s.body_pose[bb].position;
-    PairSurfaces& ps = psurf[p];
-    ps.na = opened_surfaces(m, st, s, ba, bb, ps.a);
-    ps.nb = opened_surfaces(m, st, s, bb, ba, ps.b);
-    walks.clear();
-    walks.push_back({p, m.body_root[ba], m.body_root[bb], Filter{-1, ps.a, ps.na}, Filter{-1, ps.b, ps.nb}});
-    // The cells each surface takes are marked only for the one reader, permanent_pair_energy().
-    const bool marks = mixed_permanent_pair(ba, bb);
-    if (marks) ps.near_cell.resize(ps.na + ps.nb);
-    for (int i = 0; i < ps.na; ++i) {
-      if (marks) ps.near_cell[i].assign(m.body_cell_begin[bb + 1] - m.body_cell_begin[bb], 0);
-      split(p, ps.a[i], ba, bb, true, Filter{}, marks ? &ps.near_cell[i] : nullptr);
-    }
-    for (int i = 0; i < ps.nb; ++i) {
-      if (marks) ps.near_cell[ps.na + i].assign(m.body_cell_begin[ba + 1] - m.body_cell_begin[ba], 0);
-      split(p, ps.b[i], bb, ba, false, Filter{-1, ps.a, ps.na}, marks ? &ps.near_cell[ps.na + i] : nullptr);
-    }
-    for (std::size_t w = 0; w < walks.size(); ++w) {
-      const Walk& wk = walks[w];
-      const int wid = static_cast<int>(all_walks.size());
-      all_walks.push_back(wk);
-      stack.clear();
-      stack.emplace_back(wk.na, wk.nb);
-      while (!stack.empty()) {
-        const auto [na, nb] = stack.back();
-        stack.pop_back();
-        if (!s.total.node_active[na] || !s.total.node_active[nb]) continue;
-        const int pa = wk.fa.node(m, na), pb = wk.fb.node(m, nb);
-        if (pa == 0 || pb == 0) continue;  // no cell on one side is this walk's
-        const bool mixed = pa < 0 || pb < 0;
-        const double d = (delta + s.node_offset[na] - s.node_offset[nb]).norm();
-        const double ra = m.node_radius[na], rb = m.node_radius[nb];
-        const double gap = d - ra - rb;  // lower bound on (centre distance - reaches) of any cell pair
-        const double near_margin = st.near_field * (m.node_reach[na] + m.node_reach[nb]);
-        // Far: small enough seen from each other, and moments that act as one dipole each.
-        const double theta = m.node_induced[na] || m.node_induced[nb] ? kInducedTheta * st.theta : st.theta;
-        if (!mixed && ra + rb < theta * d && gap > near_margin &&
-            (s.total.spread.empty() || spread_ok(s.total.spread[na], s.total.spread[nb], theta, d))) {
-          list.push_back({p, na, nb, kFar, wid});
-          continue;
-        }
-        const int ca = m.node_child[na], cb = m.node_child[nb];
-        // A node that the filter splits is opened first.
-        const bool open_a = ca >= 0 && (pa < 0 || cb < 0 || (pb > 0 && ra >= rb));
-        if (ca < 0 && cb < 0) {
-          unsigned char kind = kBlock;
-          if (gap < 0.0) kind |= kBlockClamp;
-          if (st.near_field > 0.0 && gap < near_margin) kind |= kBlockNear;
-          if (mixed) kind |= kBlockMixed;
-          list.push_back({p, na, nb, kind, wid});
-        } else if (open_a) {
-          for (int k = ca + m.node_nchild[na] - 1; k >= ca; --k) stack.emplace_back(k, nb);
-        } else {
-          for (int k = cb + m.node_nchild[nb] - 1; k >= cb; --k) stack.emplace_back(na, k);
+  // Each pair's walks depend on that pair alone, so chunks of pairs are listed in parallel and
+  // joined in pair order: the list is the same for any thread count.
+  constexpr int kChunk = 32;
+  const int npair = static_cast<int>(pairs.size());
+  std::vector<Chunk> chunks((npair + kChunk - 1) / kChunk);
+  parallel_for_each(static_cast<int>(chunks.size()), 1, [&](int ci) {
+    Chunk& out = chunks[ci];
+    std::vector<Walk> walks;
+    std::vector<std::pair<int, int>> stack;
+    for (int p = ci * kChunk; p < std::min(npair, (ci + 1) * kChunk); ++p) {
+      const auto [ba, bb] = pairs[p];
+      const Vec3 delta = s.body_pose[ba].position - s.body_pose[bb].position;
+      PairSurfaces& ps = psurf[p];
+      ps.na = opened_surfaces(m, st, s, ba, bb, ps.a);
+      ps.nb = opened_surfaces(m, st, s, bb, ba, ps.b);
+      walks.clear();
+      walks.push_back({p, m.body_root[ba], m.body_root[bb], Filter{-1, ps.a, ps.na}, Filter{-1, ps.b, ps.nb}});
+      // The cells each surface takes are marked only for the one reader, permanent_pair_energy().
+      const bool marks = mixed_permanent_pair(ba, bb);
+      if (marks) ps.near_cell.resize(ps.na + ps.nb);
+      for (int i = 0; i < ps.na; ++i) {
+        if (marks) ps.near_cell[i].assign(m.body_cell_begin[bb + 1] - m.body_cell_begin[bb], 0);
+        split(out, walks, p, ps.a[i], ba, bb, true, Filter{}, marks ? &ps.near_cell[i] : nullptr);
+      }
+      for (int i = 0; i < ps.nb; ++i) {
+        if (marks) ps.near_cell[ps.na + i].assign(m.body_cell_begin[ba + 1] - m.body_cell_begin[ba], 0);
+        split(out, walks, p, ps.b[i], bb, ba, false, Filter{-1, ps.a, ps.na}, marks ? &ps.near_cell[ps.na + i] : nullptr);
+      }
+      for (std::size_t w = 0; w < walks.size(); ++w) {
+        const Walk& wk = walks[w];
+        const int wid = static_cast<int>(out.walks.size());
+        out.walks.push_back(wk);
+        stack.clear();
+        stack.emplace_back(wk.na, wk.nb);
+        while (!stack.empty()) {
+          const auto [na, nb] = stack.back();
+          stack.pop_back();
+          if (!s.total.node_active[na] || !s.total.node_active[nb]) continue;
+          const int pa = wk.fa.node(m, na), pb = wk.fb.node(m, nb);
+          if (pa == 0 || pb == 0) continue;  // no cell on one side is this walk's
+          const bool mixed = pa < 0 || pb < 0;
+          const double d = (delta + s.node_offset[na] - s.node_offset[nb]).norm();
+          const double ra = m.node_radius[na], rb = m.node_radius[nb];
+          const double gap = d - ra - rb;  // lower bound on (centre distance - reaches) of any cell pair
+          const double near_margin = st.near_field * (m.node_reach[na] + m.node_reach[nb]);
+          // Far: small enough seen from each other, and moments that act as one dipole each.
+          const double theta = m.node_induced[na] || m.node_induced[nb] ? kInducedTheta * st.theta : st.theta;
+          if (!mixed && ra + rb < theta * d && gap > near_margin &&
+              (s.total.spread.empty() || spread_ok(s.total.spread[na], s.total.spread[nb], theta, d))) {
+            out.list.push_back({p, na, nb, kFar, wid});
+            continue;
+          }
+          const int ca = m.node_child[na], cb = m.node_child[nb];
+          // A node that the filter splits is opened first.
+          const bool open_a = ca >= 0 && (pa < 0 || cb < 0 || (pb > 0 && ra >= rb));
+          if (ca < 0 && cb < 0) {
+            unsigned char kind = kBlock;
+            if (gap < 0.0) kind |= kBlockClamp;
+            if (st.near_field > 0.0 && gap < near_margin) kind |= kBlockNear;
+            if (mixed) kind |= kBlockMixed;
+            out.list.push_back({p, na, nb, kind, wid});
+          } else if (open_a) {
+            for (int k = ca + m.node_nchild[na] - 1; k >= ca; --k) stack.emplace_back(k, nb);
+          } else {
+            for (int k = cb + m.node_nchild[nb] - 1; k >= cb; --k) stack.emplace_back(na, k);
+          }
         }
       }
     }
+  });
+  for (Chunk& c : chunks) {
+    const int offset = static_cast<int>(all_walks.size());
+    all_walks.insert(all_walks.end(), c.walks.begin(), c.walks.end());
+    for (Interaction& it : c.list) {
+      if (!(it.kind & (kSurfaceOnA | kSurfaceOnB))) it.walk += offset;
+    }
+    list.insert(list.end(), c.list.begin(), c.list.end());
   }
 
   // Evaluate every interaction into its own slot (parallel), then sum in list order.

@@ -64,6 +64,28 @@ TEST(DipoleKernel, GradientMatchesFiniteDifferences) {
   }
 }
 
+
+// The two-sided kernel of the walk over bodies equals two one-sided evaluations to rounding, and
+// the forces it implies balance (G_a^T m_a = -G_b^T m_b: the gradient is odd in r).
+TEST(DipoleKernel, MutualFieldsMatchTwoOneSidedEvaluations) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> dist(0.001, 0.5), mag(1e-4, 10);
+  for (int t = 0; t < 200; ++t) {
+    const Vec3 r = dist(rng) * random_unit(rng);
+    const Vec3 ma = mag(rng) * random_unit(rng), mb = mag(rng) * random_unit(rng);
+    Vec3 Ba, Bb, Ba1, Bb1;
+    Mat3 Ga, Gb, Ga1, Gb1;
+    dipole_mutual_fields(r, ma, mb, Ba, Ga, Bb, Gb);
+    dipole_field_gradient(r, mb, Ba1, Ga1);
+    dipole_field_gradient(-r, ma, Bb1, Gb1);
+    EXPECT_LT((Ba - Ba1).norm(), 1e-14 * Ba1.norm()) << t;
+    EXPECT_LT((Bb - Bb1).norm(), 1e-14 * Bb1.norm()) << t;
+    EXPECT_LT((Ga - Ga1).norm(), 1e-14 * Ga1.norm()) << t;
+    EXPECT_LT((Gb - Gb1).norm(), 1e-14 * Gb1.norm()) << t;
+    const Vec3 Fa = Ga.transpose() * ma, Fb = Gb.transpose() * mb;
+    EXPECT_LT((Fa + Fb).norm(), 1e-13 * Fa.norm()) << t;
+  }
+}
 TEST(DipoleKernel, ClampKeepsDirectionAndBoundsTheForce) {
   const Vec3 mk(0, 0, 1), mi(0, 0, 1);
   const DipolePair near = dipole_pair(Vec3(0, 0, 1e-6), mk, mi, 1e-3);
