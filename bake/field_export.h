@@ -21,7 +21,7 @@ struct FieldRequest {
   std::optional<double> margin;               ///< m (auto bounds)
   std::optional<int> every;
   double threshold = 1e-5;                    ///< T: fainter voxels stay inactive
-  double theta = 0.25;                        ///< tree opening angle (error bound, see docs)
+  double theta = 0.15;                        ///< tree opening angle (error bound, docs/field-volumes.md)
   double max_voxels = 6e7;                    ///< capacity guard
   bool allow_absolute = false;                ///< an absolute outputs.field.path may be used
 };

@@ -2,7 +2,9 @@
 // cells (the horseshoe mesh magnet, N42, and 24 steel balls), by the tree code (what
 // `magbake field` runs: theta 0.25, single precision) and by direct summation (theta 0).
 //
-//   field_bench <resolution> <tree|direct> [theta]   -> one CSV line on stdout
+//   field_bench <resolution> <tree|direct> [theta] [threshold]   -> one CSV line on stdout
+// (theta default 0.15 and threshold 1e-5 T: magbake field's defaults). The field is saved as raw
+// float32 triples (NaN = inactive) to /tmp/magbake_field_bench_<resolution>_<mode>_<theta>.f32.
 // Run each case in its own process (bench/run_field_bench.sh) so peak memory is per case.
 #include <sys/resource.h>
 
@@ -25,7 +27,8 @@ using magnetics::Vec3;
 int main(int argc, char** argv) {
   const int res = argc > 1 ? std::atoi(argv[1]) : 128;
   const std::string mode = argc > 2 ? argv[2] : "tree";
-  const double theta = argc > 3 ? std::atof(argv[3]) : 0.25;  // magbake field's default
+  const double theta = argc > 3 ? std::atof(argv[3]) : 0.15;  // magbake field's default
+  const double threshold = argc > 4 ? std::atof(argv[4]) : 1e-5;
   // Scene: horseshoe magnet (mm mesh -> m) and a ring of steel balls.
   geometry::TriangleSoup soup = geometry::load_triangles(std::string(MAGBAKE_SOURCE_DIR) + "/scenes/meshes/horseshoe.obj", 1e-3);
   geometry::MeshShape horseshoe(std::move(soup.vertices), std::move(soup.triangles));
@@ -64,12 +67,14 @@ int main(int argc, char** argv) {
   opt.smear_inside = true;
   opt.single_precision = true;
   const auto t0 = std::chrono::steady_clock::now();
-  cli::evaluate_field_grid(model, st, opt, Vec3::Zero(), 1e-5, samples);
+  cli::evaluate_field_grid(model, st, opt, Vec3::Zero(), threshold, samples);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::size_t evaluated = 0;
   for (float x : samples.bx) evaluated += !std::isnan(x);
   // Save the field for the error comparison (raw float32 triples, NaN = skipped).
-  const std::string raw = "/tmp/magbake_field_bench_" + std::to_string(res) + "_" + mode + ".f32";
+  char tag[32];
+  std::snprintf(tag, sizeof tag, "%g", opt.theta);
+  const std::string raw = "/tmp/magbake_field_bench_" + std::to_string(res) + "_" + mode + "_" + tag + ".f32";
   FILE* f = std::fopen(raw.c_str(), "wb");
   for (std::size_t q = 0; q < samples.bx.size(); ++q) {
     const float v[3] = {samples.bx[q], samples.by[q], samples.bz[q]};
@@ -78,8 +83,8 @@ int main(int argc, char** argv) {
   std::fclose(f);
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
-  std::printf("%d,%s,%g,%d,%d,%d,%zu,%.3f,%.4g,%.1f\n", res, mode.c_str(), opt.theta, samples.dims[0], samples.dims[1],
-              samples.dims[2], evaluated, seconds, evaluated / seconds, ru.ru_maxrss / 1024.0);
+  std::printf("%d,%s,%g,%g,%d,%d,%d,%zu,%.3f,%.4g,%.1f\n", res, mode.c_str(), opt.theta, threshold, samples.dims[0],
+              samples.dims[1], samples.dims[2], evaluated, seconds, evaluated / seconds, ru.ru_maxrss / 1024.0);
   std::fprintf(stderr, "cells %d, voxels %zu evaluated in %.2f s\n", model.cell_count(), evaluated, seconds);
   return 0;
 }

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
@@ -77,7 +78,7 @@ TEST_F(Field, VolumesHaveTheConventionsRenderersExpect) {
 
 // Volume values against `magbake probe` at voxel centres outside the bodies (frame 1 is the
 // scene's initial state, which probe evaluates at --time 0). The scene asks for theta 0: probe
-// sums every cell directly, field export uses its tree (--theta default 0.25) and single precision, so
+// sums every cell directly, field export uses its tree (--theta default 0.15) and single precision, so
 // the difference is field export's error (documented bound: 1e-3 RMS relative).
 TEST_F(Field, VoxelValuesMatchProbe) {
   std::ifstream in(src("tests/golden/sphere_pickup.yaml"));
@@ -125,6 +126,53 @@ TEST_F(Field, VoxelValuesMatchProbe) {
   EXPECT_LT(std::sqrt(num / den), 1e-3);
   EXPECT_LT(worst, 1e-2);
   std::printf("%zu voxels: RMS relative difference %.2e, worst %.2e\n", coords.size(), std::sqrt(num / den), worst);
+}
+
+// The accuracy docs/field-volumes.md claims for the default opening angle: against direct
+// summation (--theta 0), the 99.9th percentile of the relative error where |B| > 1 mT stays under
+// 0.5% and the RMS relative error under 1e-3. bench/field_bench's scene (its horseshoe and a ring
+// of steel balls) with the magnet's surface off, so that cells carry every field and the tree's
+// far aggregates decide the error: measured 0.10% at theta 0.15, 0.96% at the old 0.25.
+TEST_F(Field, DefaultThetaKeepsTheWorstVoxelsWithinHalfAPercentOfDirectSummation) {
+  std::ostringstream scene;
+  scene << "magbake: 1\nname: horseshoe\nunits: {length: mm, angle: deg}\n"
+           "time: {fps: 30, frames: [1, 2], dt: 0.001}\nmagnetics: {surface_tolerance: 0}\n"
+           "materials:\n  N42: {kind: permanent, remanence: 1.3, density: 7500}\n"
+           "  steel: {kind: soft, chi: 700, density: 7850}\n"
+           "bodies:\n  - {name: magnet, shape: {mesh: {file: "
+        << src("scenes/meshes/horseshoe.obj")
+        << "}}, material: N42, magnetization: [1, 0, 0], motion: static}\n";
+  for (int i = 0; i < 8; ++i) {
+    const double a = 2 * M_PI * (i + 0.5) / 8;
+    scene << "  - {name: ball" << i << ", shape: {sphere: {radius: 3}}, material: steel, motion: static, position: ["
+          << 30 * std::cos(a) << ", " << 30 * std::sin(a) << ", " << 5 * (i % 3) << "]}\n";
+  }
+  const std::string path = (dir / "horseshoe.yaml").string();
+  std::ofstream(path) << scene.str();
+  ASSERT_EQ(sh(exe() + " bake " + path + " -o " + dir.string()).code, 0);
+  const std::string cache = (dir / "horseshoe.h5").string();
+  const std::string region = " --frames 1-1 --voxel 0.0008 --bounds=-0.045,-0.045,-0.02,0.045,0.045,0.03";
+  ASSERT_EQ(sh(exe() + " field " + cache + region + " -o " + (dir / "tree.####.vdb").string()).code, 0);
+  ASSERT_EQ(sh(exe() + " field " + cache + region + " --theta 0 -o " + (dir / "direct.####.vdb").string()).code, 0);
+  auto tree = openvdb::gridPtrCast<openvdb::Vec3SGrid>((*read(dir / "tree.0001.vdb"))[0]);
+  auto direct = openvdb::gridPtrCast<openvdb::Vec3SGrid>((*read(dir / "direct.0001.vdb"))[0]);
+  ASSERT_TRUE(tree && direct);
+  auto acc = tree->getConstAccessor();
+  std::vector<double> rel;
+  double num = 0, den = 0;
+  for (auto it = direct->cbeginValueOn(); it; ++it) {
+    const openvdb::Vec3s d = *it, t = acc.getValue(it.getCoord());
+    const double e = (t - d).length(), m = d.length();
+    num += e * e, den += m * m;
+    if (m > 1e-3) rel.push_back(e / m);
+  }
+  ASSERT_GT(rel.size(), 500000u);
+  std::sort(rel.begin(), rel.end());
+  const double p999 = rel[static_cast<std::size_t>(0.999 * (rel.size() - 1))];
+  std::printf("%zu voxels above 1 mT: relative error p99.9 %.2e, max %.2e; RMS %.2e\n", rel.size(), p999, rel.back(),
+              std::sqrt(num / den));
+  EXPECT_LT(p999, 0.005);
+  EXPECT_LT(std::sqrt(num / den), 1e-3);
 }
 
 TEST_F(Field, SplitFrameRangesGiveTheSameVolumes) {
