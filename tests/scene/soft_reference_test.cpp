@@ -1,0 +1,73 @@
+// Soft (induced) bodies against converged references (tests/data/soft_reference.json, made by
+// scripts/make_soft_reference.py: the coupled solve at 32,768-64,000 cells, extrapolated to zero
+// cell size): a soft cube's moment in a uniform field and a soft sphere's force above a cube
+// magnet, at draft, default and high. Issue 14's targets (3% at default and 1% at high for
+// chi up to 2e4) are not all met yet: each bound below is the error measured on 2026-12-06
+// (bench/results/soft_cube_2026-12-06, soft_sphere_2026-12-06) plus a margin of about 0.3
+// percentage points for the reference's own uncertainty, so that a change that loses accuracy
+// fails here, and a graded-cell change that gains it tightens these numbers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "magnetics/system.h"
+#include "scene/load.h"
+#include "scene/scene_magnetics.h"
+#include "support/reference_text.h"
+
+namespace magbake::testing {
+namespace {
+
+nlohmann::json reference() {
+  std::ifstream in(source_dir() + "/tests/data/soft_reference.json");
+  EXPECT_TRUE(in.good());
+  return nlohmann::json::parse(in);
+}
+
+// The case's quantity (moment or force along z of its body) at a preset.
+double value_at(const nlohmann::json& c, const std::string& quality) {
+  const std::string text = replace_all(replace_all(c["scene"].get<std::string>(), "QUALITY", quality), "CELL", "");
+  const scene::Scene sc = scene::load_scene_text(text, source_dir() + "/tests/data/soft.yaml");
+  const magnetics::Model m = scene::build_magnetics_model(sc);
+  magnetics::State st;
+  st.resize(m);
+  scene::set_poses_at(sc, 0.0, st);
+  magnetics::Result r;
+  magnetics::evaluate(m, scene::magnetics_settings(sc), st, r);
+  EXPECT_TRUE(r.induction.converged) << c["name"] << " at " << quality;
+  const int b = c["body"].get<int>();
+  return c["quantity"] == "moment_z" ? r.moment[b][2] : r.force[b][2];
+}
+
+TEST(SoftReference, CubeMomentAndSphereForceAtEveryPreset) {
+  // Measured (relative, all too small in magnitude): cube chi 10 / 700 / 2e4: draft -8.4 / -13.9 /
+  // -14.0%, default -3.6 / -6.2 / -6.2%, high -1.3 / -2.3 / -2.3%; sphere 1 / 5 / 20 mm above
+  // the magnet: draft -9.6 / -12.6 / -1.7%, default -2.6 / -3.2 / -0.46%, high -0.96 / -0.34 /
+  // -0.06% (chi 700 and 2e4 alike).
+  const std::map<std::string, std::map<std::string, double>> bound = {
+      {"cube_chi10", {{"draft", 0.09}, {"default", 0.04}, {"high", 0.016}}},
+      {"cube_chi700", {{"draft", 0.145}, {"default", 0.065}, {"high", 0.026}}},
+      {"cube_chi20000", {{"draft", 0.145}, {"default", 0.065}, {"high", 0.026}}},
+      {"sphere_gap1mm", {{"draft", 0.10}, {"default", 0.029}, {"high", 0.013}}},
+      {"sphere_gap5mm", {{"draft", 0.13}, {"default", 0.035}, {"high", 0.0065}}},
+      {"sphere_gap20mm", {{"draft", 0.02}, {"default", 0.0075}, {"high", 0.004}}}};
+  const nlohmann::json ref = reference();
+  ASSERT_EQ(ref["cases"].size(), 9u);
+  for (const auto& c : ref["cases"]) {
+    std::string name = c["name"].get<std::string>();
+    if (name.rfind("sphere", 0) == 0) name = "sphere" + name.substr(name.find("_gap"));
+    const double r = c["reference"].get<double>();
+    for (const char* quality : {"draft", "default", "high"}) {
+      const double err = value_at(c, quality) / r - 1.0;
+      std::printf("%-24s %-8s %+.2f%%\n", c["name"].get<std::string>().c_str(), quality, 100 * err);
+      EXPECT_LT(std::abs(err), bound.at(name).at(quality)) << c["name"] << " at " << quality;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace magbake::testing
