@@ -70,7 +70,7 @@ for chi in (10, 700, 2e4):
                   "reference": ref, "uncertainty": unc, "runs": runs})
     print(cases[-1]["name"], ref, unc, flush=True)
 for chi in (700, 2e4):
-    for gap in (1, 5, 20):
+    for gap in (0.05, 1, 5, 20):
         text = sphere_scene(chi, gap)
         ref, unc, runs = converged(text, lambda j: j["bodies"][1]["force"][2], (20, 24))
         cases.append({"name": "sphere_chi%g_gap%gmm" % (chi, gap), "scene": text, "quantity": "force_z", "body": 1,

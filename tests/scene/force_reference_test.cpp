@@ -14,6 +14,7 @@
 #include "scene/load.h"
 #include "scene/scene_magnetics.h"
 #include "support/reference_text.h"
+#include "support/scene_eval.h"
 
 namespace magbake::testing {
 namespace {
@@ -44,12 +45,7 @@ Errors errors_at(const nlohmann::json& c, std::size_t q, const std::string& qual
   text = replace_all(replace_all(replace_all(text, "TX", buf[0]), "TY", buf[1]), "TZ", buf[2]);
   scene::Scene sc = scene::load_scene_text(text, source_dir() + "/tests/data/ref.yaml");
   if (!surfaces) sc.magnetics.surface_tolerance = 0;
-  const magnetics::Model m = scene::build_magnetics_model(sc);
-  magnetics::State st;
-  st.resize(m);
-  scene::set_poses_at(sc, 0.0, st);
-  magnetics::Result r;
-  magnetics::evaluate(m, scene::magnetics_settings(sc), st, r);
+  const magnetics::Result r = evaluate_at_start(sc);
   const Vec3 F = r.force[1], T = r.torque[1];
   const Vec3 Fr = vec(c["force"][q]), Tr = vec(c["torque"][q]);
   const double half = c["name"] == "ball_beside_cylinder" ? 0.002 : 0.005;

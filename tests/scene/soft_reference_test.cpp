@@ -14,10 +14,9 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
-#include "magnetics/system.h"
 #include "scene/load.h"
-#include "scene/scene_magnetics.h"
 #include "support/reference_text.h"
+#include "support/scene_eval.h"
 
 namespace magbake::testing {
 namespace {
@@ -31,13 +30,7 @@ nlohmann::json reference() {
 // The case's quantity (moment or force along z of its body) at a preset.
 double value_at(const nlohmann::json& c, const std::string& quality) {
   const std::string text = replace_all(replace_all(c["scene"].get<std::string>(), "QUALITY", quality), "CELL", "");
-  const scene::Scene sc = scene::load_scene_text(text, source_dir() + "/tests/data/soft.yaml");
-  const magnetics::Model m = scene::build_magnetics_model(sc);
-  magnetics::State st;
-  st.resize(m);
-  scene::set_poses_at(sc, 0.0, st);
-  magnetics::Result r;
-  magnetics::evaluate(m, scene::magnetics_settings(sc), st, r);
+  const magnetics::Result r = evaluate_at_start(scene::load_scene_text(text, source_dir() + "/tests/data/soft.yaml"));
   EXPECT_TRUE(r.induction.converged) << c["name"] << " at " << quality;
   const int b = c["body"].get<int>();
   return c["quantity"] == "moment_z" ? r.moment[b][2] : r.force[b][2];
@@ -45,18 +38,21 @@ double value_at(const nlohmann::json& c, const std::string& quality) {
 
 TEST(SoftReference, CubeMomentAndSphereForceAtEveryPreset) {
   // Measured (relative, all too small in magnitude): cube chi 10 / 700 / 2e4: draft -8.4 / -13.9 /
-  // -14.0%, default -3.6 / -6.2 / -6.2%, high -1.3 / -2.3 / -2.3%; sphere 1 / 5 / 20 mm above
-  // the magnet: draft -9.6 / -12.6 / -1.7%, default -2.6 / -3.2 / -0.46%, high -0.96 / -0.34 /
-  // -0.06% (chi 700 and 2e4 alike).
+  // -14.0%, default -3.6 / -6.2 / -6.2%, high -1.3 / -2.3 / -2.3%; sphere 0.05 / 1 / 5 / 20 mm
+  // above the magnet: draft +0.01 / -9.6 / -12.6 / -1.7%, default +10.9 / -2.6 / -3.2 / -0.46%,
+  // high +8.4 / -0.96 / -0.34 / -0.06% (chi 700 and 2e4 alike; at contact too strong).
   const std::map<std::string, std::map<std::string, double>> bound = {
       {"cube_chi10", {{"draft", 0.09}, {"default", 0.04}, {"high", 0.016}}},
       {"cube_chi700", {{"draft", 0.145}, {"default", 0.065}, {"high", 0.026}}},
       {"cube_chi20000", {{"draft", 0.145}, {"default", 0.065}, {"high", 0.026}}},
+      // At contact the reference itself is uncertain by 2.9% (n = 20 and 24 differ by 0.7%,
+      // converging from above), so the margin here is that, not 0.3 points.
+      {"sphere_gap0.05mm", {{"draft", 0.035}, {"default", 0.145}, {"high", 0.12}}},
       {"sphere_gap1mm", {{"draft", 0.10}, {"default", 0.029}, {"high", 0.013}}},
       {"sphere_gap5mm", {{"draft", 0.13}, {"default", 0.035}, {"high", 0.0065}}},
       {"sphere_gap20mm", {{"draft", 0.02}, {"default", 0.0075}, {"high", 0.004}}}};
   const nlohmann::json ref = reference();
-  ASSERT_EQ(ref["cases"].size(), 9u);
+  ASSERT_EQ(ref["cases"].size(), 11u);
   for (const auto& c : ref["cases"]) {
     std::string name = c["name"].get<std::string>();
     if (name.rfind("sphere", 0) == 0) name = "sphere" + name.substr(name.find("_gap"));
