@@ -39,7 +39,7 @@ def sphere_scene(chi, gap):
 
 
 def evaluate(text, cell_mm):
-    scene = text.replace("QUALITY", "high").replace("CELL", ", cell_size: %.10g" % cell_mm)
+    scene = text.replace("QUALITY", "high").replace("CELL", ", cell_size: %.10g, grading: 0" % cell_mm)
     path = os.path.join(ROOT, "build", "soft_reference_scene.yaml")
     with open(path, "w") as f:
         f.write(scene)
@@ -79,5 +79,5 @@ for chi in (700, 2e4):
 
 with open(os.path.join(ROOT, "tests", "data", "soft_reference.json"), "w") as f:
     json.dump({"generator": "scripts/make_soft_reference.py",
-               "method": "high preset, cell_size edge/n at two fine n, h^2 extrapolation averaged with the finer value",
+               "method": "high preset with uniform cells (grading 0), cell_size edge/n at two fine n, h^2 extrapolation averaged with the finer value",
                "cases": cases}, f, indent=1)

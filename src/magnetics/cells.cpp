@@ -3,6 +3,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -20,13 +21,15 @@ struct PartCells {
   std::vector<Vec3> centroid;  // centroid of the material inside the cell, part frame, m
   std::vector<double> volume;  // m³ (cuboid volume x inside fraction)
   std::vector<std::uint8_t> full;
-  Vec3 half = Vec3::Zero();
+  std::vector<Vec3> cell_half;  // half-edges of each cell, part frame, m (finer where graded)
+  Vec3 half = Vec3::Zero();     // half-edges of the part's base lattice, m
 };
 
 // Decomposes one solid into grid cells of edge <= cell_size. Boundary cells keep the inside
 // fraction of their volume and the centroid of that inside part (both from sub-samples); the
 // cuboid of every cell stays on the lattice, so neighbouring cuboids never overlap.
-PartCells decompose(const Solid& solid, double cell_size, const BuildSettings& s, std::int64_t budget) {
+// `levels` > 0 grades the cells towards the surface (BuildSettings::grading).
+PartCells decompose(const Solid& solid, double cell_size, const BuildSettings& s, std::int64_t budget, int levels) {
   const Box3 box = solid.bounds();
   const Vec3 size = box.sizes();
   // Cell counts in floating point first: a cell size far below the part's size must give a clear
@@ -104,14 +107,79 @@ PartCells decompose(const Solid& solid, double cell_size, const BuildSettings& s
 
   PartCells out;
   out.half = 0.5 * e;
+  auto emit = [&](const Vec3& center, const Vec3& centroid, double volume, bool is_full, const Vec3& half) {
+    // Checked as cells are made: grading multiplies the surface cells by about 4 per level.
+    if (static_cast<std::int64_t>(out.center.size()) >= budget) {
+      throw std::runtime_error("magnetics: a graded part needs more than the limit of " + std::to_string(budget) +
+                               " cells; raise magnetics.cell_size or lower magnetics.grading");
+    }
+    out.center.push_back(center);
+    out.centroid.push_back(centroid);
+    out.volume.push_back(volume);
+    out.full.push_back(is_full);
+    out.cell_half.push_back(half);
+  };
+  // A cell is graded when it lies at the surface: partly inside, or with the centre of a
+  // face-neighbour of its own size outside the solid on at least `grading_faces` axes.
+  const int faces = std::max(1, s.grading_faces);
+  auto at_surface = [&](const Vec3& c, const Vec3& edge, bool is_full) {
+    if (!is_full) return true;
+    int exposed = 0;
+    for (int a = 0; a < 3; ++a) {
+      Vec3 d = Vec3::Zero();
+      d[a] = edge[a];
+      if (!solid.contains(c + d) || !solid.contains(c - d)) ++exposed;
+    }
+    return exposed >= faces;
+  };
+  // Splits a graded cell (lower corner lo, edges edge) into 8 and recurses; children of a full
+  // cell are full, the others are classified like the base lattice.
+  std::function<void(const Vec3&, const Vec3&, int, bool)> refine = [&](const Vec3& lo, const Vec3& edge, int level,
+                                                                        bool parent_full) {
+    const Vec3 ce = 0.5 * edge;
+    for (int q = 0; q < 8; ++q) {
+      const Vec3 clo = lo + Vec3((q & 1) * ce[0], ((q >> 1) & 1) * ce[1], ((q >> 2) & 1) * ce[2]);
+      const Vec3 c = clo + 0.5 * ce;
+      double f = 1.0;
+      Vec3 centroid = c;
+      bool is_full = parent_full;
+      if (!parent_full) {
+        int inside = solid.contains(c) ? 1 : 0;
+        for (int k = 0; k < 8; ++k) inside += solid.contains(clo + Vec3((k & 1) * ce[0], ((k >> 1) & 1) * ce[1], ((k >> 2) & 1) * ce[2]));
+        is_full = inside == 9;
+        if (!is_full) {
+          int count = 0;
+          Vec3 sum = Vec3::Zero();
+          for (int c2 = 0; c2 < ss; ++c2) {
+            for (int b2 = 0; b2 < ss; ++b2) {
+              for (int a2 = 0; a2 < ss; ++a2) {
+                const Vec3 p = clo + Vec3((a2 + 0.5) / ss * ce[0], (b2 + 0.5) / ss * ce[1], (c2 + 0.5) / ss * ce[2]);
+                if (solid.contains(p)) ++count, sum += p;
+              }
+            }
+          }
+          if (count == 0) continue;
+          f = double(count) / (ss * ss * ss);
+          centroid = sum / count;
+        }
+      }
+      if (level < levels && at_surface(c, ce, is_full)) {
+        refine(clo, ce, level + 1, is_full);
+      } else {
+        emit(c, centroid, f * ce.prod(), is_full, 0.5 * ce);
+      }
+    }
+  };
   for (std::int64_t id = 0; id < total; ++id) {
     if (frac[id] <= 0.0) continue;
     const int i = static_cast<int>(id % n[0]), j = static_cast<int>((id / n[0]) % n[1]),
               k = static_cast<int>(id / (std::int64_t(n[0]) * n[1]));
-    out.center.push_back(grid_point(i, j, k) + 0.5 * e);
-    out.centroid.push_back(cen[id]);
-    out.volume.push_back(frac[id] * cell_volume);
-    out.full.push_back(full[id]);
+    const Vec3 c = grid_point(i, j, k) + 0.5 * e;
+    if (levels > 0 && at_surface(c, e, full[id])) {
+      refine(grid_point(i, j, k), e, 1, full[id]);
+    } else {
+      emit(c, cen[id], frac[id] * cell_volume, full[id], out.half);
+    }
   }
   return out;
 }
@@ -402,8 +470,9 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
         pc.volume = {ps.solid->volume()};
         pc.full = {0};
         pc.half = Vec3::Constant(radius);
+        pc.cell_half = {pc.half};
       } else {
-        pc = decompose(*ps.solid, cell, settings, budget);
+        pc = decompose(*ps.solid, cell, settings, budget, chi != 0.0 ? settings.grading : 0);
       }
       if (pc.centroid.empty()) {
         throw std::runtime_error("magnetics: body " + std::to_string(b) +
@@ -422,7 +491,7 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
         cells.part.push_back(pid);
         cells.position.push_back(ps.part_to_body.apply(pc.centroid[q]));
         cells.center.push_back(ps.part_to_body.apply(pc.center[q]));
-        cells.half.push_back(pc.half);
+        cells.half.push_back(pc.cell_half[q]);
         cells.moment.push_back(M * v);
         cells.volume.push_back(v);
         cells.chi.push_back(chi);

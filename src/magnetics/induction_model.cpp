@@ -1,8 +1,11 @@
 #include "induction_model.h"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <unordered_map>
 #include <vector>
 
@@ -20,15 +23,48 @@ Mat3 dipole_tensor(const Vec3& r) {
 
 namespace {
 
+// Mean-field tensors between cells of one part of different sizes (graded cells), part frame,
+// by the two half-edges and the offset in units of the smaller half-edge. Not thread-safe.
+class GradedTensors {
+ public:
+  const Mat3& get(const Vec3& ht, const Vec3& hs, const Vec3& offset) {
+    const Vec3 unit = ht.cwiseMin(hs);
+    std::array<std::int64_t, 9> key;
+    for (int a = 0; a < 3; ++a) {
+      key[a] = std::bit_cast<std::int64_t>(ht[a]);
+      key[3 + a] = std::bit_cast<std::int64_t>(hs[a]);
+      key[6 + a] = std::llround(offset[a] / unit[a]);
+    }
+    auto it = cache_.find(key);
+    if (it == cache_.end()) {
+      const Vec3 o(key[6] * unit[0], key[7] * unit[1], key[8] * unit[2]);
+      it = cache_.emplace(key, cuboid_mean_field_tensor(Cuboid{o, Mat3::Identity(), ht, Vec3::Zero()},
+                                                        Cuboid{Vec3::Zero(), Mat3::Identity(), hs, Vec3::Zero()}, 6))
+               .first;
+    }
+    return it->second;
+  }
+
+ private:
+  std::map<std::array<std::int64_t, 9>, Mat3> cache_;
+};
+
 // Mean-field tensor (body frame) of cell j's cuboid over cell i's cuboid, per unit M of j.
-Mat3 mean_tensor(const Model& m, LatticeTensors* lattice, int i, int j) {
+// Cells of one part share its lattice axes: tabulated by offset (LatticeTensors for equal
+// cells, GradedTensors for cells of different grading levels).
+Mat3 mean_tensor(const Model& m, LatticeTensors* lattice, GradedTensors* graded, int i, int j) {
   const int pi = m.cell_part[i], pj = m.cell_part[j];
   if (pi == pj && lattice) {
     const Mat3& R = m.part_rotation[pi];
-    const Vec3 h = m.part_half[pi];
-    const Vec3 o = (R.transpose() * (m.cell_center[i] - m.cell_center[j])).cwiseQuotient(2.0 * h);
-    const Eigen::Vector3i off(int(std::lround(o[0])), int(std::lround(o[1])), int(std::lround(o[2])));
-    return R * lattice->get(h, off) * R.transpose();
+    const Vec3 d = R.transpose() * (m.cell_center[i] - m.cell_center[j]);
+    const Vec3& hi = m.cell_half[i];
+    const Vec3& hj = m.cell_half[j];
+    if (hi == hj) {
+      const Vec3 o = d.cwiseQuotient(2.0 * hi);
+      const Eigen::Vector3i off(int(std::lround(o[0])), int(std::lround(o[1])), int(std::lround(o[2])));
+      return R * lattice->get(hi, off) * R.transpose();
+    }
+    return R * graded->get(hi, hj, d) * R.transpose();
   }
   return cuboid_mean_field_tensor(Cuboid{m.cell_center[i], m.part_rotation[pi], m.cell_half[i], Vec3::Zero()},
                                   Cuboid{m.cell_center[j], m.part_rotation[pj], m.cell_half[j], Vec3::Zero()}, 4);
@@ -47,6 +83,7 @@ void build_induction_model(Model& m, const std::vector<const Solid*>& part_solid
   m.near_tensor.clear();
   if (nind == 0) return;
   LatticeTensors lattice;
+  GradedTensors graded;
 
   // 1. Near rows inside each body: (exact mean field of the source cuboid - point dipole).
   std::vector<std::vector<int>> cand(nind);
@@ -71,7 +108,7 @@ void build_induction_model(Model& m, const std::vector<const Solid*>& part_solid
     for (int e = m.near_begin[r]; e < m.near_begin[r + 1]; ++e) {
       const int j = m.near_cell[e];
       if (m.cell_part[i] != m.cell_part[j]) continue;
-      m.near_tensor[e] = kMu0 * mean_tensor(m, &lattice, i, j) / (8.0 * m.cell_half[j].prod()) -
+      m.near_tensor[e] = kMu0 * mean_tensor(m, &lattice, &graded, i, j) / (8.0 * m.cell_half[j].prod()) -
                          dipole_tensor(m.cell_position[i] - m.cell_position[j]);
     }
   }
@@ -80,7 +117,7 @@ void build_induction_model(Model& m, const std::vector<const Solid*>& part_solid
     for (int e = m.near_begin[r]; e < m.near_begin[r + 1]; ++e) {
       const int j = m.near_cell[e];
       if (m.cell_part[i] == m.cell_part[j]) continue;
-      m.near_tensor[e] = kMu0 * mean_tensor(m, nullptr, i, j) / (8.0 * m.cell_half[j].prod()) -
+      m.near_tensor[e] = kMu0 * mean_tensor(m, nullptr, nullptr, i, j) / (8.0 * m.cell_half[j].prod()) -
                          dipole_tensor(m.cell_position[i] - m.cell_position[j]);
     }
   });
@@ -98,11 +135,19 @@ void build_induction_model(Model& m, const std::vector<const Solid*>& part_solid
     Mat3 probe;
     const bool consistent = part_solid[p]->demag_tensor(Vec3::Zero(), probe);
     m.part_consistent[p] = consistent;
-    const Mat3 own = -R * lattice.get(m.part_half[p], Eigen::Vector3i::Zero()) * R.transpose();
+    // Own cuboid tensors of the part's cell sizes (one per grading level), looked up serially.
+    std::map<std::array<std::int64_t, 3>, Mat3> own_of;
+    for (int r : rank) {
+      const Vec3& h = m.cell_half[m.induced_cells[r]];
+      const std::array<std::int64_t, 3> key{std::bit_cast<std::int64_t>(h[0]), std::bit_cast<std::int64_t>(h[1]),
+                                            std::bit_cast<std::int64_t>(h[2])};
+      if (!own_of.count(key)) own_of[key] = -R * lattice.get(h, Eigen::Vector3i::Zero()) * R.transpose();
+    }
     parallel_for_each(static_cast<int>(rank.size()), 8, [&](int q) {
       const int r = rank[q];
       const int i = m.induced_cells[r];
-      Mat3 N = own;
+      const Vec3& h = m.cell_half[i];
+      Mat3 N = own_of.at({std::bit_cast<std::int64_t>(h[0]), std::bit_cast<std::int64_t>(h[1]), std::bit_cast<std::int64_t>(h[2])});
       if (consistent) {
         // Exact field of the uniformly magnetized part at the cell ...
         Mat3 D;

@@ -61,6 +61,14 @@ struct BuildSettings {
   /// A part keeps its surface only up to this many triangles: every target near it costs one
   /// evaluation per triangle (a 4096-triangle mesh about 0.3 ms), so finer meshes keep their cells.
   int max_surface_triangles = 4096;
+  /// Induced (soft) parts: cells at the surface are split in 8, this many times over, so the
+  /// solve resolves the magnetization that gathers at edges, corners and near other bodies
+  /// (physics.md §7). 0 = uniform cells.
+  int grading = 0;
+  /// A cell is graded when it is partly inside its solid or has the centre of a face-neighbour
+  /// of its own size outside it on at least this many axes (1 = every surface cell, 2 = edges
+  /// and corners of flat-faced solids, and the curved surface).
+  int grading_faces = 1;
 };
 
 /// Per-part statistics of the decomposition.

@@ -102,6 +102,8 @@ struct MagneticsSettings {
   /// Preset: curved permanent magnets keep their surface, tessellated within this distance (m),
   /// for the exact field near them (physics.md §12).
   double surface_tolerance = 1e-5;
+  /// Preset: soft parts' surface cells are split in 8 this many times (BuildSettings::grading).
+  int grading = 0;
 };
 
 struct FieldOutput {

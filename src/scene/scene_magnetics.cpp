@@ -10,10 +10,11 @@ bool apply_quality_preset(const std::string& quality, MagneticsSettings& mg) {
     int near_field_order;
     double induction_tolerance;
     double surface_tolerance;
+    int grading;
   };
-  static constexpr Preset kPresets[] = {{"draft", 2, 0.7, 1.5, 3, 1e-3, 5e-5},
-                                        {"default", 4, 0.5, 2.5, 4, 1e-4, 1e-5},
-                                        {"high", 8, 0.3, 4.0, 6, 1e-6, 2e-6}};
+  static constexpr Preset kPresets[] = {{"draft", 2, 0.7, 1.5, 3, 1e-3, 5e-5, 0},
+                                        {"default", 4, 0.5, 2.5, 4, 1e-4, 1e-5, 0},
+                                        {"high", 8, 0.3, 4.0, 6, 1e-6, 2e-6, 1}};
   for (const Preset& p : kPresets) {
     if (quality != p.name) continue;
     mg.quality = quality;
@@ -23,6 +24,7 @@ bool apply_quality_preset(const std::string& quality, MagneticsSettings& mg) {
     mg.near_field_order = p.near_field_order;
     mg.induction_tolerance = p.induction_tolerance;
     mg.surface_tolerance = p.surface_tolerance;
+    mg.grading = p.grading;
     return true;
   }
   return false;
@@ -75,6 +77,7 @@ magnetics::Model build_magnetics_model(const Scene& sc) {
   magnetics::BuildSettings bs;
   bs.cell_size = sc.magnetics.cell_size.value_or(0.001);
   bs.surface_tolerance = sc.magnetics.surface_tolerance;
+  bs.grading = sc.magnetics.grading;
   return magnetics::build_model(bodies, bs);
 }
 

@@ -470,6 +470,13 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       mg.surface_tolerance = s.surface_tolerance.v * c.L;
     }
   }
+  if (s.grading.set) {
+    if (!(s.grading.v == 0 || s.grading.v == 1 || s.grading.v == 2 || s.grading.v == 3)) {
+      d.add(s.grading.loc, "magnetics.grading", "must be 0 (uniform cells), 1, 2 or 3 (levels of finer cells at soft surfaces)");
+    } else {
+      mg.grading = static_cast<int>(s.grading.v);
+    }
+  }
   if (s.external_field.set && within(c, s.external_field, "magnetics.external_field", kMaxFieldTesla, 1, "T")) {
     mg.external_field = vec3(s.external_field);
   }

@@ -170,6 +170,8 @@ TEST_F(Hostile, NumbersThatOverflowAreErrorsAtTheirKey) {
       {"quality: draft,", "quality: draft, cell_size: 1e-12,", "magnetics.cell_size"},
       {"quality: draft,", "quality: draft, surface_tolerance: 1e-12,", "magnetics.surface_tolerance"},
       {"quality: draft,", "quality: draft, surface_tolerance: -1,", "magnetics.surface_tolerance"},
+      {"quality: draft,", "quality: draft, grading: 4,", "magnetics.grading"},
+      {"quality: draft,", "quality: draft, grading: 0.5,", "magnetics.grading"},
   };
   for (const Case& c : cases) {
     const fs::path s = scene("n.yaml", with(kScene, c.from, c.to));

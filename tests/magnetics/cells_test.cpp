@@ -1,6 +1,8 @@
 // Cell decomposition and hierarchy invariants.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <numbers>
 
 #include "support/scenes.h"
@@ -94,6 +96,78 @@ TEST(Cells, TooManyCellsIsAnErrorNamingTheKnob) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("raise magnetics.cell_size"), std::string::npos) << e.what();
   }
+}
+
+// Graded cells (BuildSettings::grading, physics.md §7): every surface cell of a soft part is
+// split in 8 per level, so a 4 x 4 x 4 cube keeps its 8 inner cells and has 56 x 8 = 448 cells
+// of half the edge at level 1; at level 2 the 8^3 - 6^3 = 296 of those on the surface split again
+// (296 x 8 + 152 + 8 = 2528). The cells tile the cube: volumes sum to it, moments follow them.
+// Permanent parts are not graded.
+TEST(Cells, GradedSoftCubeSplitsItsSurfaceCellsAndTilesTheCube) {
+  const int expected[] = {64, 456, 2528};
+  for (int level = 0; level <= 2; ++level) {
+    Rig s;
+    s.grading = level;
+    s.add(std::make_unique<geometry::BoxShape>(Vec3(0.01, 0.01, 0.01)), linear(700));
+    s.add(std::make_unique<geometry::BoxShape>(Vec3(0.01, 0.01, 0.01)), permanent(1.0), Pose{Quat::Identity(), Vec3(0.02, 0, 0)});
+    s.build(0.0025);
+    const int soft = s.model.body_cell_begin[1];
+    EXPECT_EQ(soft, expected[level]) << "level " << level;
+    EXPECT_EQ(s.model.cell_count() - soft, 64) << "level " << level;
+    double volume = 0, smallest = 1;
+    for (int c = 0; c < soft; ++c) {
+      volume += s.model.cell_volume[c];
+      smallest = std::min(smallest, s.model.cell_half[c][0]);
+      EXPECT_TRUE(s.model.cell_full[c]);
+      EXPECT_NEAR(s.model.cell_volume[c], 8 * s.model.cell_half[c].prod(), 1e-20);
+      // Inside the cube, and a cell's cuboid is on its parent's lattice.
+      EXPECT_LE((s.model.cell_center[c].cwiseAbs() + s.model.cell_half[c]).maxCoeff(), 0.005 + 1e-15);
+    }
+    EXPECT_NEAR(volume, 1e-6, 1e-18) << "level " << level;
+    EXPECT_DOUBLE_EQ(smallest, 0.00125 / (1 << level));
+  }
+}
+
+// A curved soft part: graded boundary cells keep their inside fractions, so the measured volume
+// gets closer to the true one (less rescale) and the cell count grows by about 4x per level.
+TEST(Cells, GradedSoftSphereMeasuresItsVolumeBetter) {
+  double rescale_error[2];
+  int count[2];
+  for (int level = 0; level <= 1; ++level) {
+    Rig s;
+    s.grading = level;
+    s.add(std::make_unique<geometry::SphereShape>(0.005), linear(700));
+    s.build(0.0025);
+    rescale_error[level] = std::abs(s.model.part_report[0].rescale - 1.0);
+    count[level] = s.model.cell_count();
+    double volume = 0;
+    for (int c = 0; c < s.model.cell_count(); ++c) volume += s.model.cell_volume[c];
+    EXPECT_NEAR(volume, 4.0 / 3.0 * std::numbers::pi * 1.25e-7, 1e-12 * 1.25e-7);
+  }
+  EXPECT_LT(rescale_error[1], rescale_error[0]);
+  EXPECT_GT(count[1], 4 * count[0]);
+}
+
+// A lattice within the cell limit whose grading is not is refused while it is built, naming
+// both knobs: a 10 mm soft cube at 1.25 mm is 512 cells, 2584 graded once, 12,048 twice (the
+// high preset's counts in bench/results/soft_graded_2026-12-06), against a limit of 10,000.
+TEST(Cells, GradingPastTheCellLimitIsAnErrorNamingTheKnob) {
+  Rig s;
+  s.add(std::make_unique<geometry::BoxShape>(Vec3(0.01, 0.01, 0.01)), linear(700));
+  magnetics::BuildSettings bs;
+  bs.cell_size = 0.00125;
+  bs.grading = 2;
+  bs.max_cells = 10'000;
+  try {
+    magnetics::build_model(s.bodies, bs);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("lower magnetics.grading"), std::string::npos) << e.what();
+  }
+  bs.grading = 1;
+  EXPECT_EQ(magnetics::build_model(s.bodies, bs).cell_count(), 2584);
+  bs.grading = 0;
+  EXPECT_EQ(magnetics::build_model(s.bodies, bs).cell_count(), 512);
 }
 
 TEST(Hierarchy, NodesAggregateAndBoundTheirCells) {

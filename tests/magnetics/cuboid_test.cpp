@@ -187,3 +187,30 @@ TEST(CuboidField, TensorMatchesTheFieldOfEachMagnetization) {
 
 }  // namespace
 }  // namespace magbake::testing
+
+namespace magbake::testing {
+namespace {
+
+// Graded cells (physics.md §7) pair cuboids of different sizes. The field of a source cuboid is
+// the sum of the fields of its 8 halves, so its mean over a target must be the sum of the
+// halves' means: the unequal-size tensor checked against equal-size ones, touching and apart.
+TEST(CuboidField, MeanTensorOfUnequalCuboidsIsTheSumOverTheSourcesHalves) {
+  using magnetics::Cuboid;
+  using magnetics::Mat3;
+  using magnetics::Vec3;
+  const Vec3 H(0.002, 0.002, 0.002), h = 0.5 * H;
+  for (const Vec3& target_center : {Vec3(0.003, 0.001, -0.001), Vec3(0.003, 0.003, 0.003), Vec3(0.001, 0.001, 0.003),
+                                    Vec3(0.009, -0.001, 0.001)}) {
+    const Cuboid target{target_center, Mat3::Identity(), h, Vec3::Zero()};
+    const Mat3 whole = magnetics::cuboid_mean_field_tensor(target, Cuboid{Vec3::Zero(), Mat3::Identity(), H, Vec3::Zero()}, 6);
+    Mat3 halves = Mat3::Zero();
+    for (int q = 0; q < 8; ++q) {
+      const Vec3 c((q & 1) ? h[0] : -h[0], (q & 2) ? h[1] : -h[1], (q & 4) ? h[2] : -h[2]);
+      halves += magnetics::cuboid_mean_field_tensor(target, Cuboid{c, Mat3::Identity(), h, Vec3::Zero()}, 6);
+    }
+    EXPECT_LT((whole - halves).norm(), 1e-9 * halves.norm() + 1e-12) << target_center.transpose();
+  }
+}
+
+}  // namespace
+}  // namespace magbake::testing

@@ -15,6 +15,7 @@ void Rig::build(double cell_size, int leaf_size) {
   bs.cell_size = cell_size;
   bs.leaf_size = leaf_size;
   bs.exact_balls = exact_balls;
+  bs.grading = grading;
   model = magnetics::build_model(bodies, bs);
   state = magnetics::State{};
   state.resize(model);

@@ -23,6 +23,8 @@ struct Rig {
   /// BuildSettings::exact_balls: false cuts permanent spheres into lattice cells (to test the
   /// lattice on a shape with a closed-form field).
   bool exact_balls = true;
+  /// BuildSettings::grading: levels of finer cells at the surface of induced parts.
+  int grading = 0;
 
   /// Adds a one-part body; returns its index.
   int add(std::unique_ptr<geometry::Shape> shape, const Material& material, const Pose& part = Pose{});

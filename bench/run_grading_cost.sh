@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# What graded soft cells (magnetics.grading, physics.md §7) cost on the paper's scenes: the same
+# binary bakes each scene's first frames with `grading: 0` (uniform cells, the code path before
+# grading) and `grading: 1` (the default preset's), interleaved, REPEAT times each, 1 thread;
+# prints the median wall time of each bake, the ratio, the induced cell counts and the mean
+# induction iterations per evaluation (from the caches).
+#   bench/run_grading_cost.sh [BUILD_DIR] [REPEAT]     (default build, 3)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+exe=${1:-build}/bake/magbake
+repeat=${2:-3}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+rows=("tst|1-30" "bowl_spheres|1-15" "bowl_2008|1-15" "supercube|1-15" "dragon_low|1-2")
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); load before: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo
+echo "| scene | preset | frames | grading 0: bake s (median of $repeat) | grading 1: bake s | ratio | induction iterations per frame (mean of the cache observable) 0 / 1 |"
+echo "| --- | --- | --- | --- | --- | --- | --- |"
+median() { tr ' ' '\n' | grep . | sort -g | awk '{a[NR]=$1} END {print (NR%2 ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2)}'; }
+for row in "${rows[@]}"; do
+  IFS='|' read -r name frames <<< "$row"
+  for g in 0 1; do
+    # Outputs: the cache only (no previews or volumes), written under the work folder.
+    sed -e "s|^magnetics: {|magnetics: {grading: $g, |" -e "s|\.\./meshes/|$PWD/scenes/meshes/|" \
+      -e '/^  preview:/,/camera:/d' scenes/paper/$name.yaml > "$work/${name}_$g.yaml"
+    grep -q "grading: $g" "$work/${name}_$g.yaml" || { echo "could not set grading in $name" >&2; exit 1; }
+  done
+  preset=$(grep -o 'quality: [a-z]*' scenes/paper/$name.yaml | head -1 | cut -d' ' -f2)
+  declare -A t=()
+  for r in $(seq "$repeat"); do
+    for g in 0 1; do
+      rm -rf "$work/out_$g"
+      t0=$(date +%s.%N)
+      "$exe" -q --threads 1 bake "$work/${name}_$g.yaml" --frames "$frames" -o "$work/out_$g" >/dev/null
+      t1=$(date +%s.%N)
+      t[$g]+="$(echo "$t1 - $t0" | bc) "
+    done
+  done
+  its=()
+  for g in 0 1; do
+    its+=("$(/usr/bin/python3 - "$work/out_$g" <<'P'
+import glob, sys, h5py
+f = h5py.File(glob.glob(sys.argv[1] + "/*.h5")[0], "r")
+found = []
+f.visit(lambda n: found.append(n) if n.endswith("induction_iterations/value") else None)
+print("%.1f" % f[found[0]][()].mean() if found else "?")
+P
+)")
+  done
+  a=$(echo "${t[0]}" | median) b=$(echo "${t[1]}" | median)
+  echo "| $name | $preset | $frames | $a | $b | $(echo "scale=2; $b / $a" | bc) | ${its[0]} / ${its[1]} |"
+done
+echo
+echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"
