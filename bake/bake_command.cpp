@@ -166,7 +166,12 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
 
 
   sim::HealthMonitor health(s, simulator.state());
-  Progress progress("bake " + s.name, last - first + 1, g.quiet);
+  // The job's stages for ALF_PROGRESS: simulating a frame costs far more than exporting it.
+  std::vector<std::pair<std::string, double>> stages{{"bake", 8.0}};
+  if (s.field) stages.emplace_back("field", 1.0);
+  if (s.preview) stages.emplace_back("preview", 1.0);
+  plan_job(stages);
+  Progress progress("bake", "bake " + s.name, last - first + 1, g.quiet);
   const auto t0 = std::chrono::steady_clock::now();
   double magnetics_seconds = 0, rigid_seconds = 0;
   int written = 0;
@@ -186,7 +191,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
         if (hooks.before_write) hooks.before_write(next_frame);
         writer->append(next_frame, 0.0, simulator.state(), simulator.measure());
         ++written;
-        progress.update(next_frame - first + 1, "frame " + std::to_string(next_frame));
+        progress.update(next_frame - first + 1, next_frame, last);
       }
       ++next_frame;
     }
@@ -206,7 +211,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
         writer->append(simulator.frame(), s.frame_time(simulator.frame()), simulator.state(), d);
         ++written;
       }
-      progress.update(simulator.frame() - first + 1, "frame " + std::to_string(simulator.frame()));
+      progress.update(simulator.frame() - first + 1, simulator.frame(), last);
       ++next_frame;
     }
   } catch (const sim::NumericalFault& e) {

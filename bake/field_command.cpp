@@ -113,7 +113,7 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
   const auto coms = cache->centers_of_mass();
   magnetics::State st;
   st.resize(model);
-  Progress progress("field", (b - a) / every + 1, g.quiet);
+  Progress progress("field", "field", (b - a) / every + 1, g.quiet);
   int done = 0;
   for (int i = 0; i < cache->frame_count(); ++i) {
     const io::CacheFrame fr = cache->frame(i);
@@ -151,7 +151,7 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
       return kFailure;
     }
     ++done;
-    progress.update(done, "frame " + std::to_string(fr.frame));
+    progress.update(done, fr.frame, a + (b - a) / every * every);
   }
   progress.finish();
   spdlog::info("wrote {} field volumes ({})", done, pattern);

@@ -349,7 +349,7 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
       }
     }
   };
-  Progress progress("preview", b - a + 1, g.quiet);
+  Progress progress("preview", "preview", b - a + 1, g.quiet);
   int done = 0;
   for (const io::CacheFrame& fr : frames) {
     if (fr.frame < a || fr.frame > b) continue;
@@ -390,7 +390,7 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
     spdlog::debug("preview frame {} ms: lines {:.2f} draw {:.2f} png {:.2f} total {:.2f} ({} lines)", fr.frame, ms(t1 - t0),
                   ms(t2 - t1), ms(t3 - t2), ms(Clock::now() - t0), lines.size());
     ++done;
-    progress.update(done, "frame " + std::to_string(fr.frame));
+    progress.update(done, fr.frame, b);
   }
   progress.finish();
   if (!sheet.empty()) {

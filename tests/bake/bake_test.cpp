@@ -7,10 +7,12 @@
 #include <unistd.h>
 
 #include <array>
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <sstream>
 #include <string>
 
 #include "cli.h"
@@ -139,16 +141,16 @@ int bake_and_signal(const std::string& scene, const fs::path& out, int sig, int 
     execl(MAGBAKE_EXE, MAGBAKE_EXE, "--threads", "1", "bake", scene.c_str(), "-o", o.c_str(), (char*)nullptr);
     _exit(127);
   }
-  // Not a tty: the bake prints "Progress: NN%" lines to the log.
+  // Not a tty: the bake prints "Progress: bake NN% frame F/L" lines to the log.
   // Waits up to 10 minutes (a sanitizer build bakes the demo at ~1 s per frame).
   bool reached = false;
   for (int i = 0; i < 120000 && !reached; ++i) {
     std::ifstream log(out.string() + ".log");
     std::string line, last;
     while (std::getline(log, line)) {
-      if (line.rfind("Progress: ", 0) == 0) last = line;
+      if (line.rfind("Progress: bake ", 0) == 0) last = line;
     }
-    reached = !last.empty() && std::stoi(last.substr(10)) >= percent;
+    reached = !last.empty() && std::stoi(last.substr(15)) >= percent;
     if (!reached) usleep(5000);
   }
   EXPECT_TRUE(reached) << "the bake never reported " << percent << "%";
@@ -353,12 +355,51 @@ TEST_F(Bake, ForeignCorruptAndMissingFilesAreErrorsForDiffAndInfo) {
   EXPECT_NE(sh(exe() + " info " + (dir / "random.h5").string()).out.find("not an HDF5 file"), std::string::npos);
 }
 
+// A bake that also writes field volumes and previews is one job for the farm: each stage's
+// lines name it and the frame, and the job's `Progress: NN%` and ALF_PROGRESS rise through the
+// stages (bake 80%, field and preview 10% each) without ever going back, to 100% once.
+TEST_F(Bake, FarmProgressNamesTheStageAndRisesOverTheWholeJob) {
+  std::ifstream in(src("tests/golden/magnets_in_space.yaml"));
+  std::stringstream text;
+  text << in.rdbuf();
+  const fs::path scene = dir / "job.yaml";
+  std::ofstream(scene) << text.str() << "outputs:\n  cache: job.h5\n  field: {path: f.####.vdb, voxel: 2, every: 2}\n"
+                       << "  preview: {path: p.####.png, size: [64, 36]}\n";
+  const Outcome r = sh(exe() + " bake " + scene.string() + " -o " + (dir / "job").string() + " --frames 3-12");
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::istringstream lines(r.out);
+  std::string line, stages;
+  int last_alf = -1, alf_lines = 0, plain = -1;
+  while (std::getline(lines, line)) {
+    if (line.rfind("ALF_PROGRESS ", 0) == 0) {
+      const int alf = std::stoi(line.substr(13));
+      EXPECT_GT(alf, last_alf) << line;
+      EXPECT_EQ(plain, alf) << "the plain Progress line before it";
+      last_alf = alf, ++alf_lines;
+    } else if (line.rfind("Progress: ", 0) == 0 && std::isdigit(static_cast<unsigned char>(line[10]))) {
+      plain = std::stoi(line.substr(10));
+    } else if (line.rfind("Progress: ", 0) == 0) {
+      const std::string stage = line.substr(10, line.find(' ', 10) - 10);
+      if (stages.empty() || stages.substr(stages.rfind(' ') + 1) != stage) stages += " " + stage;
+    }
+  }
+  EXPECT_EQ(stages, " bake field preview");
+  EXPECT_EQ(last_alf, 100);
+  EXPECT_GE(alf_lines, 20);
+  EXPECT_NE(r.out.find("Progress: bake 100% frame 12/12\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("ALF_PROGRESS 80%\n"), std::string::npos) << r.out;
+  // Field volumes every 2nd frame from 3: 3, 5, ..., 11 (the last is 11 of 11).
+  EXPECT_NE(r.out.find("Progress: field 100% frame 11/11\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Progress: preview 100% frame 12/12\n"), std::string::npos) << r.out;
+}
+
 TEST_F(Bake, FarmProgressLinesAndFrameRange) {
   const Outcome r = sh(exe() + " bake " + src("tests/golden/magnets_in_space.yaml") + " -o " + (dir / "p").string() +
                        " --frames 1-10");
   ASSERT_EQ(r.code, 0) << r.out;
-  EXPECT_NE(r.out.find("Progress: 100%"), std::string::npos);
-  EXPECT_NE(r.out.find("ALF_PROGRESS 100%"), std::string::npos);
+  EXPECT_NE(r.out.find("Progress: bake 10% frame 1/10\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Progress: bake 100% frame 10/10\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Progress: 100%\nALF_PROGRESS 100%\n"), std::string::npos) << r.out;
   EXPECT_EQ(io::CacheReader((dir / "p/magnets_in_space.h5").string()).frame_count(), 10);
   EXPECT_EQ(sh(exe() + " bake " + src("tests/golden/magnets_in_space.yaml") + " --frames 5-2").code, 2);
   EXPECT_EQ(sh(exe() + " bake " + src("tests/golden/magnets_in_space.yaml") + " --frames 1-999").code, 2);
