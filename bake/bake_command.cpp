@@ -46,7 +46,7 @@ fs::path cache_path_for(const scene::Scene& s, const std::string& out_dir) {
 }
 
 int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
-             const Global& g, bool strict, bool allow_absolute, const BakeHooks& hooks) {
+             const Global& g, bool strict, bool allow_absolute, const BakeHooks& hooks, bool cache_only) {
   auto loaded = load_or_report(path);
   if (!loaded) return kUsage;
   const scene::Scene& s = *loaded;
@@ -168,8 +168,8 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
   sim::HealthMonitor health(s, simulator.state());
   // The job's stages for ALF_PROGRESS: simulating a frame costs far more than exporting it.
   std::vector<std::pair<std::string, double>> stages{{"bake", 8.0}};
-  if (s.field) stages.emplace_back("field", 1.0);
-  if (s.preview) stages.emplace_back("preview", 1.0);
+  if (s.field && !cache_only) stages.emplace_back("field", 1.0);
+  if (s.preview && !cache_only) stages.emplace_back("preview", 1.0);
   plan_job(stages);
   Progress progress("bake", "bake " + s.name, last - first + 1, g.quiet);
   const auto t0 = std::chrono::steady_clock::now();
@@ -254,7 +254,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
                  strict ? "; --strict: exit 1 (the cache and outputs are complete)" : "");
   }
   // Outputs that read the cache: field volumes (outputs.field), frames written by this bake.
-  if (s.field) {
+  if (s.field && !cache_only) {
     FieldRequest req;
     req.frames = std::make_pair(first, last);
     req.allow_absolute = allow_absolute;
@@ -262,7 +262,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
     const int rc = export_field(cache.string(), req, g);
     if (rc != kOk) return rc;
   }
-  if (s.preview) {
+  if (s.preview && !cache_only) {
     PreviewRequest req;
     req.frames = std::make_pair(first, last);
     req.allow_absolute = allow_absolute;

@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "cli.h"
+#include "farm.h"
 #include "field_export.h"
 #include "preview_export.h"
 #include "progress.h"
@@ -93,6 +94,26 @@ int run(int argc, char** argv) {
   bool allow_absolute = false;
   bake->add_flag("--allow-absolute-outputs", allow_absolute,
                  "let the scene's absolute output paths be used (by default a scene writes inside the output folder)");
+
+  bool cache_only = false;
+  bake->add_flag("--cache-only", cache_only,
+                 "write the cache only, not the field volumes and previews of outputs (farm: export jobs do those)");
+
+  cli::FarmRequest farm_req;
+  auto* farm = app.add_subcommand("farm", "submit a shot to a farm: a simulation job, then export array jobs (docs/farm.md)");
+  farm->add_option("scene", farm_req.scene, "scene file (YAML)")->required();
+  farm->add_option("--engine", farm_req.engine, "scheduler (slurm)")->capture_default_str();
+  farm->add_option("--chunk", farm_req.chunk, "frames per export array task")->capture_default_str();
+  farm->add_option("--partition", farm_req.partition, "Slurm partition (default: the cluster's)");
+  farm->add_option("--time", farm_req.time_limit, "Slurm time limit of each job, e.g. 04:00:00");
+  farm->add_option("--cpus", farm_req.cpus, "CPUs of each job (magbake --threads there)")->capture_default_str();
+  farm->add_option("-o,--output", farm_req.out_dir, "shot folder (default: the folder of outputs.cache)");
+  farm->add_option("--magbake", farm_req.magbake, "magbake program the jobs run (default: this one)");
+  farm->add_option("--wedge", farm_req.wedges,
+                   "KEY=V1,V2: bake every combination of the wedged scene settings (repeatable; docs/farm.md)");
+  auto* submit_flag = farm->add_flag("--submit", farm_req.submit, "write the scripts under <shot>/farm/ and submit them");
+  bool dry_run = false;
+  farm->add_flag("--dry-run", dry_run, "print the scripts, write and submit nothing (the default)")->excludes(submit_flag);
 
   std::string cache_a, cache_b;
   io::DiffOptions diff_options;
@@ -253,7 +274,25 @@ int run(int argc, char** argv) {
     cli::install_interrupt_handlers();
     return cache_reader_command(preview_cache, [&] { return cli::export_preview(preview_cache, preview_req, g); });
   }
-  if (*bake) return cli::cmd_bake(scene_path, out_dir, frames, resume, g, strict, allow_absolute);
+  if (*bake) return cli::cmd_bake(scene_path, out_dir, frames, resume, g, strict, allow_absolute, {}, cache_only);
+  if (*farm) {
+    if (farm_req.chunk < 1 || farm_req.chunk > 1000000) {
+      spdlog::error("--chunk must be from 1 to 1000000, got {}", farm_req.chunk);
+      return cli::kUsage;
+    }
+    if (farm_req.cpus < 1 || farm_req.cpus > 4096) {
+      spdlog::error("--cpus must be from 1 to 4096, got {}", farm_req.cpus);
+      return cli::kUsage;
+    }
+    // Values that go into #SBATCH lines: no spaces, quotes or newlines.
+    for (const auto& [option, value] : {std::pair{"--partition", farm_req.partition}, std::pair{"--time", farm_req.time_limit}}) {
+      if (value.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.,:-") != std::string::npos) {
+        spdlog::error("{} may hold letters, digits and _ . , : - only, got '{}'", option, value);
+        return cli::kUsage;
+      }
+    }
+    return cli::cmd_farm(farm_req, g);
+  }
   if (*diff) return cli::cmd_diff(cache_a, cache_b, diff_options, g);
   if (*check) return cli::cmd_check(scene_path, trial_seconds, json, g);
   if (*info) return cli::cmd_info(scene_path, g);

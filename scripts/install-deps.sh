@@ -25,6 +25,8 @@ packages=(
   clang libclang-rt-dev
   # the same binary baked on emulated Intel and AMD CPUs (Bake.SameCacheOnEmulatedIntelAndAmdCpus)
   qemu-user binutils
+  # a single-node Slurm cluster for the farm tests (scripts/slurm-local.sh)
+  slurm-wlm munge
 )
 
 missing=()

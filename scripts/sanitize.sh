@@ -5,6 +5,9 @@
 # (listed in $slow below: the 390 s snapped-cubes sweep, and the kill -9 test, 416 s under ASan
 # because it waits for progress lines); run them with --all, e.g. nightly. Any sanitizer
 # report fails its test (-fno-sanitize-recover; LSan suppressions in tests/lsan.supp).
+# The real-Slurm farm tests (Farm.Slurm_*) are in $slow too: they bake, export and preview the
+# demo shot through the scheduler twice (the farm command's own code is covered by
+# FarmCommand.* in both builds).
 # Bake.SameCacheOnEmulatedIntelAndAmdCpus never runs here: it runs the binary under qemu-user,
 # and an instrumented binary's shadow memory and run time there test qemu, not magbake (the
 # normal build runs it).
@@ -12,7 +15,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build-asan}
 all=${2:-}
-slow='^(Contact\.SnappedCubesStayTogetherAndGainNoEnergy|Bake\.KillNineLeavesAReadableCacheWithEveryCompletedFrame|Bake\.SameCacheOnEmulatedIntelAndAmdCpus)$'
+slow='^(Contact\.SnappedCubesStayTogetherAndGainNoEnergy|Bake\.KillNineLeavesAReadableCacheWithEveryCompletedFrame|Bake\.SameCacheOnEmulatedIntelAndAmdCpus|Farm\.Slurm_.*)$'
 never='^Bake\.SameCacheOnEmulatedIntelAndAmdCpus$'
 if [ ! -f "$build/build.ninja" ]; then
   cmake -S . -B "$build" -G Ninja -DMAGBAKE_SANITIZE=ON -DMAGBAKE_BUILD_BENCH=OFF >/dev/null

@@ -12,6 +12,8 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -272,6 +274,82 @@ TEST(Commands, NonFiniteResultsExitOneAndPrintNothing) {
   EXPECT_EQ(p.code, 1);
   EXPECT_TRUE(p.out.empty()) << p.out;
   std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace magbake::testing
+
+namespace magbake::testing {
+namespace {
+
+// `magbake farm --dry-run` (docs/farm.md): the job scripts of a shot, without a scheduler.
+TEST(FarmCommand, DryRunPrintsTheSimulationAndChunkedExportJobs) {
+  const std::string out = (std::filesystem::temp_directory_path() / ("magbake_farm_" + std::to_string(::getpid()))).string();
+  const Outcome r = magbake("farm " + scene("demo.yaml") + " -o " + out + " --chunk 20 --partition gpu --cpus 4 --dry-run");
+  ASSERT_EQ(r.code, 0) << r.out;
+  // Simulation: requeued on preemption, warned by SIGUSR1, resumes from its partial cache, and
+  // writes the cache only (the exports are their own jobs).
+  for (const std::string& want : std::vector<std::string>{"#SBATCH --job-name=toy_magnet_and_sphere-bake\n", "#SBATCH --requeue\n", "#SBATCH --signal=B:USR1@120\n",
+        "#SBATCH --partition=gpu\n", "#SBATCH --cpus-per-task=4\n", "--threads 4 bake ", "--cache-only $resume",
+        "if [ -e '" + out + "/demo.h5.partial' ]; then resume=--resume; fi\n", "scontrol requeue \"$SLURM_JOB_ID\"",
+        "--dependency=afterok:<bake job> " + out + "/farm/field.sh"}) {
+    EXPECT_NE(r.out.find(want), std::string::npos) << want << "\n" << r.out;
+  }
+  // Field volumes every 3rd frame: chunks of 20 become 21 so that each task starts on a frame a
+  // full run writes; 90 frames -> 5 tasks. Previews: chunks of 20 -> 5 tasks.
+  const std::size_t field = r.out.find("# magbake farm: field of toy_magnet_and_sphere from " + out +
+                                       "/demo.h5, frames 1-90 in chunks of 21\n");
+  ASSERT_NE(field, std::string::npos) << r.out;
+  EXPECT_NE(r.out.rfind("#SBATCH --array=0-4\n", field), std::string::npos);
+  EXPECT_NE(r.out.find("a=$(( 1 + ${SLURM_ARRAY_TASK_ID:-0} * 21 ))\nb=$(( a + 20 ))\nif [ $b -gt 90 ]; then b=90; fi\n"),
+            std::string::npos);
+  EXPECT_NE(r.out.find("field '" + out + "/demo.h5' --frames $a-$b -o '" + out + "/field.####.vdb'"), std::string::npos);
+  EXPECT_NE(r.out.find("preview '" + out + "/demo.h5' --frames $a-$b -o '" + out + "/preview.####.png'"),
+            std::string::npos);
+  // A dry run writes nothing.
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// Wedges: every combination gets a folder and a resolved scene (mesh paths made absolute), and
+// a combination that is not a valid scene stops the command before anything is written.
+TEST(FarmCommand, WedgesPlanEveryCombinationAndRefuseInvalidOnes) {
+  const std::string out = (std::filesystem::temp_directory_path() / ("magbake_wedge_" + std::to_string(::getpid()))).string();
+  const std::string bowl = scene("paper/bowl_spheres.yaml");
+  const Outcome r = magbake("farm " + bowl + " -o " + out +
+                            " --wedge magnetics.theta=0.3,0.5 --wedge materials.steel.chi=100,700,2e4 --dry-run");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("#SBATCH --array=0-5\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(out + "/wedges/000_magnetics.theta=0.3_materials.steel.chi=100'"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(out + "/wedges/005_magnetics.theta=0.5_materials.steel.chi=2e4/scene.yaml"), std::string::npos);
+  EXPECT_NE(r.out.find("--dependency=afterany:<wedge job> " + out + "/farm/summary.sh"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(out));
+  // Bad syntax, a path that leads nowhere, and a value the scene validation refuses: exit 2.
+  for (const std::string bad : {"magnetics.theta", "magnetics..theta=1", "bodies.nobody.position=[0, 0, 1]",
+                                "materials.steel.chi=abc", "magnetics.theta=0.3,[1"}) {
+    const Outcome b = magbake("farm " + bowl + " -o " + out + " --wedge '" + bad + "' --dry-run", true);
+    EXPECT_EQ(b.code, 2) << bad << "\n" << b.out;
+  }
+  EXPECT_NE(magbake("farm " + bowl + " --wedge materials.steel.chi=abc", true).out.find("wedge case 0"), std::string::npos);
+}
+
+TEST(FarmCommand, BadOptionsExitTwoAndAMissingSbatchExitsOneWithTheReason) {
+  EXPECT_EQ(magbake("farm " + scene("demo.yaml") + " --engine tractor").code, 2);
+  EXPECT_EQ(magbake("farm " + scene("demo.yaml") + " --chunk 0").code, 2);
+  EXPECT_EQ(magbake("farm " + scene("demo.yaml") + " --partition 'a b'").code, 2);
+  EXPECT_EQ(magbake("farm " + scene("demo.yaml") + " --submit --dry-run").code, 2);
+  EXPECT_EQ(magbake("farm " + scene("no_such_scene.yaml")).code, 2);
+  const std::string out = (std::filesystem::temp_directory_path() / ("magbake_farm_nosb_" + std::to_string(::getpid()))).string();
+  // A PATH without sbatch, for the child only (env(1)).
+  const std::string cmd = "env PATH=/nonexistent " + std::string(MAGBAKE_EXE) + " farm " + scene("demo.yaml") + " -o " +
+                          out + " --submit 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string text;
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), buf.size(), p)) text += buf.data();
+  const int st = pclose(p);
+  EXPECT_EQ(WIFEXITED(st) ? WEXITSTATUS(st) : -1, 1) << text;
+  EXPECT_NE(text.find("sbatch is not in PATH"), std::string::npos) << text;
+  std::filesystem::remove_all(out);
 }
 
 }  // namespace
