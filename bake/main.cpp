@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <memory>
 
 #include "cli.h"
@@ -111,6 +112,8 @@ int run(int argc, char** argv) {
   farm->add_option("--magbake", farm_req.magbake, "magbake program the jobs run (default: this one)");
   farm->add_option("--wedge", farm_req.wedges,
                    "KEY=V1,V2: bake every combination of the wedged scene settings (repeatable; docs/farm.md)");
+  std::string wedge_file;
+  farm->add_option("--wedge-file", wedge_file, "file of KEY=V1,V2 lines (# comments), as more --wedge options");
   auto* submit_flag = farm->add_flag("--submit", farm_req.submit, "write the scripts under <shot>/farm/ and submit them");
   bool dry_run = false;
   farm->add_flag("--dry-run", dry_run, "print the scripts, write and submit nothing (the default)")->excludes(submit_flag);
@@ -289,6 +292,19 @@ int run(int argc, char** argv) {
       if (value.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.,:-") != std::string::npos) {
         spdlog::error("{} may hold letters, digits and _ . , : - only, got '{}'", option, value);
         return cli::kUsage;
+      }
+    }
+    if (!wedge_file.empty()) {
+      std::ifstream in(wedge_file);
+      if (!in) {
+        spdlog::error("--wedge-file {}: cannot read it", wedge_file);
+        return cli::kUsage;
+      }
+      std::string line;
+      while (std::getline(in, line)) {
+        const auto a = line.find_first_not_of(" \t\r"), b = line.find_last_not_of(" \t\r");
+        if (a == std::string::npos || line[a] == '#') continue;
+        farm_req.wedges.push_back(line.substr(a, b - a + 1));
       }
     }
     return cli::cmd_farm(farm_req, g);

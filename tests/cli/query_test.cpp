@@ -330,6 +330,12 @@ TEST(FarmCommand, WedgesPlanEveryCombinationAndRefuseInvalidOnes) {
     EXPECT_EQ(b.code, 2) << bad << "\n" << b.out;
   }
   EXPECT_NE(magbake("farm " + bowl + " --wedge materials.steel.chi=abc", true).out.find("wedge case 0"), std::string::npos);
+  // The same wedges from a file, one per line, with comments and blank lines.
+  const std::string file = temp_scene("wedges.txt", "# theta and chi\nmagnetics.theta=0.3,0.5\n\n  materials.steel.chi=100,700,2e4\n");
+  const Outcome f = magbake("farm " + bowl + " -o " + out + " --wedge-file " + file + " --dry-run");
+  ASSERT_EQ(f.code, 0) << f.out;
+  EXPECT_EQ(f.out, r.out);
+  EXPECT_EQ(magbake("farm " + bowl + " --wedge-file /nonexistent/wedges.txt").code, 2);
 }
 
 TEST(FarmCommand, BadOptionsExitTwoAndAMissingSbatchExitsOneWithTheReason) {
