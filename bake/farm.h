@@ -21,6 +21,7 @@ struct FarmRequest {
   int cpus = 1;                ///< --cpus-per-task of every job, and magbake's --threads there
   int warning_seconds = 120;   ///< the simulation job gets SIGUSR1 this long before its time limit
   bool submit = false;         ///< false: print the scripts (dry run)
+  bool allow_absolute = false; ///< an absolute outputs.cache may name the shot folder (without -o)
   std::vector<std::string> wedges;  ///< "KEY=V1,V2" each (wedge.h): bake every combination instead
 };
 

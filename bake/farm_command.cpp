@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "cache_export.h"
 #include "scene/load.h"
 #include "subprocess.h"
 #include "wedge.h"
@@ -213,6 +214,12 @@ int cmd_farm(const FarmRequest& r, const Global& g) {
   }
   auto loaded = load_or_report(r.scene);
   if (!loaded) return kUsage;
+  // Without -o the shot folder comes from outputs.cache, under the same rule as `bake`: a scene
+  // writes inside the folder it is run from unless absolute outputs are allowed.
+  if (r.out_dir.empty() && loaded->cache &&
+      check_scene_output_path(*loaded->cache, r.allow_absolute, "outputs.cache") != kOk) {
+    return kUsage;
+  }
   FarmPlan plan = plan_farm(*loaded, r);
   if (!r.wedges.empty()) {
     std::vector<Wedge> wedges;

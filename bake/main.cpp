@@ -112,6 +112,8 @@ int run(int argc, char** argv) {
   farm->add_option("--magbake", farm_req.magbake, "magbake program the jobs run (default: this one)");
   farm->add_option("--wedge", farm_req.wedges,
                    "KEY=V1,V2: bake every combination of the wedged scene settings (repeatable; docs/farm.md)");
+  farm->add_flag("--allow-absolute-outputs", farm_req.allow_absolute,
+                 "without -o, let an absolute outputs.cache of the scene name the shot folder");
   std::string wedge_file;
   farm->add_option("--wedge-file", wedge_file, "file of KEY=V1,V2 lines (# comments), as more --wedge options");
   auto* submit_flag = farm->add_flag("--submit", farm_req.submit, "write the scripts under <shot>/farm/ and submit them");

@@ -344,6 +344,15 @@ TEST(FarmCommand, BadOptionsExitTwoAndAMissingSbatchExitsOneWithTheReason) {
   EXPECT_EQ(magbake("farm " + scene("demo.yaml") + " --partition 'a b'").code, 2);
   EXPECT_EQ(magbake("farm " + scene("demo.yaml") + " --submit --dry-run").code, 2);
   EXPECT_EQ(magbake("farm " + scene("no_such_scene.yaml")).code, 2);
+  // An absolute outputs.cache names the shot folder only when allowed (as for bake).
+  const std::string abs = temp_scene("abs.yaml",
+                                     "magbake: 1\nname: abs\nunits: {length: mm, angle: deg}\n"
+                                     "time: {fps: 30, frames: [1, 3], dt: 0.001}\nmaterials:\n  m: {kind: none, density: 1000}\n"
+                                     "bodies:\n  - {name: a, shape: {box: [1, 1, 1]}, material: m}\n"
+                                     "outputs:\n  cache: /tmp/magbake_abs_shot/abs.h5\n");
+  EXPECT_EQ(magbake("farm " + abs).code, 2);
+  EXPECT_NE(magbake("farm " + abs + " --allow-absolute-outputs").out.find("#SBATCH --output=/tmp/magbake_abs_shot/farm/logs/bake-%j.log"),
+            std::string::npos);
   const std::string out = (std::filesystem::temp_directory_path() / ("magbake_farm_nosb_" + std::to_string(::getpid()))).string();
   // A PATH without sbatch, for the child only (env(1)).
   const std::string cmd = "env PATH=/nonexistent " + std::string(MAGBAKE_EXE) + " farm " + scene("demo.yaml") + " -o " +
