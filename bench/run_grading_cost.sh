@@ -7,16 +7,16 @@
 #   bench/run_grading_cost.sh [BUILD_DIR] [REPEAT]     (default build, 3)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source bench/bench_lib.sh
 exe=${1:-build}/bake/magbake
 repeat=${2:-3}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 rows=("tst|1-30" "bowl_spheres|1-15" "bowl_2008|1-15" "supercube|1-15" "dragon_low|1-2")
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); load before: $(cut -d' ' -f1-3 /proc/loadavg)"
+machine_line
 echo
 echo "| scene | preset | frames | grading 0: bake s (median of $repeat) | grading 1: bake s | ratio | induction iterations per frame (mean of the cache observable) 0 / 1 |"
 echo "| --- | --- | --- | --- | --- | --- | --- |"
-median() { tr ' ' '\n' | grep . | sort -g | awk '{a[NR]=$1} END {print (NR%2 ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2)}'; }
 for row in "${rows[@]}"; do
   IFS='|' read -r name frames <<< "$row"
   for g in 0 1; do

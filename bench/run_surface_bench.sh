@@ -5,6 +5,7 @@
 #   bench/run_surface_bench.sh [BUILD_DIR] [REPEAT]     (default build, 5)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source bench/bench_lib.sh
 exe=${1:-build}/bake/magbake
 repeat=${2:-5}
 work=$(mktemp -d)
@@ -27,7 +28,6 @@ for r in $(seq "$repeat"); do
     field[$v]+="$(echo "$t2 - $t1" | bc) "
   done
 done
-median() { tr ' ' '\n' | grep . | sort -g | awk '{a[NR]=$1} END {print (NR%2 ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2)}'; }
 echo "| variant | bake 2 frames + previews, s (median of $repeat) | field volume 1 mm voxels, frame 1, s |"
 echo "| --- | --- | --- |"
 for v in surfaces cells; do

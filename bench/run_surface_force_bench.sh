@@ -6,16 +6,16 @@
 #   bench/run_surface_force_bench.sh [BUILD_DIR] [REPEAT]     (default build-release, 3)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source bench/bench_lib.sh
 exe=${1:-build-release}/bake/magbake
 repeat=${2:-3}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 rows=("tst|1-60" "tst_same|1-45" "bowl_spheres|1-24" "dragon_low|1-3")
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); load before: $(cut -d' ' -f1-3 /proc/loadavg)"
+machine_line
 echo
 echo "| scene | frames | surfaces: bake s (median of $repeat) | cells only: bake s | ratio |"
 echo "| --- | --- | --- | --- | --- |"
-median() { tr ' ' '\n' | grep . | sort -g | awk '{a[NR]=$1} END {print (NR%2 ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2)}'; }
 for row in "${rows[@]}"; do
   IFS='|' read -r name frames <<< "$row"
   # Outputs: the cache only (no previews or volumes), written under the work folder.
