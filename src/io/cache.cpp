@@ -40,6 +40,38 @@ constexpr Series kObservables[] = {{"kinetic_energy", 1, "kg m2 s-2"},      {"gr
                                    {"sleeping", 1, ""},                     {"body_steps", 1, ""}};
 constexpr std::size_t kRequiredObservables = 14;  // "sleeping" and "body_steps" are optional when read
 
+static_assert(kStuckValues == sim::StuckJoint::kValues);
+
+// A stuck joint as a row of /contacts/stuck: a, b, then the members in declaration order
+// (matrices row-major).
+std::vector<double> stuck_row(const sim::StuckJoint& j) {
+  std::vector<double> r{double(j.a), double(j.b)};
+  auto put = [&](const auto& m) {
+    for (int i = 0; i < int(m.rows()); ++i)
+      for (int k = 0; k < int(m.cols()); ++k) r.push_back(m(i, k));
+  };
+  put(j.normal_in_a);
+  r.push_back(j.mu);
+  r.push_back(j.lever);
+  put(j.pivot_a), put(j.pivot_b), put(j.basis_a), put(j.basis_b), put(j.origin_a), put(j.origin_b);
+  return r;
+}
+
+sim::StuckJoint stuck_joint(const double* r) {
+  sim::StuckJoint j;
+  j.a = int(r[0]), j.b = int(r[1]);
+  int at = 2;
+  auto get = [&](auto& m) {
+    for (int i = 0; i < int(m.rows()); ++i)
+      for (int k = 0; k < int(m.cols()); ++k) m(i, k) = r[at++];
+  };
+  get(j.normal_in_a);
+  j.mu = r[at++];
+  j.lever = r[at++];
+  get(j.pivot_a), get(j.pivot_b), get(j.basis_a), get(j.basis_b), get(j.origin_a), get(j.origin_b);
+  return j;
+}
+
 std::vector<double> flat(const std::vector<Vec3>& v) {
   std::vector<double> out;
   out.reserve(3 * v.size());
@@ -65,6 +97,8 @@ struct CacheWriter::Impl {
   std::vector<Handle> body_series;   // kBodySeries order
   std::vector<Handle> observables;   // kObservables order
   Handle step, time, induced, frames_done, status;
+  Handle stuck_count, stuck;         // /contacts
+  hsize_t stuck_rows = 0;            // rows of /contacts/stuck written
   const scene::Scene* scene = nullptr;
   std::size_t ninduced = 0;
 };
@@ -290,6 +324,13 @@ CacheWriter::CacheWriter(const std::string& path, const scene::Scene& sc, const 
       const hsize_t ichunk = std::max<hsize_t>(1, std::min<hsize_t>(64, 16384 / m.ninduced));
       m.induced = h5::create_series(g.id(), "value", H5T_NATIVE_DOUBLE, {m.ninduced, 3}, ichunk, "A m2");
     }
+    // Stuck joints (sim::StuckJoint), ragged: frame k's are the next stuck_count[k] rows.
+    Handle contacts = h5::create_group(f, "contacts");
+    m.stuck_count = h5::create_series(contacts.id(), "stuck_count", H5T_NATIVE_INT64, {}, 256);
+    m.stuck = h5::create_series(contacts.id(), "stuck", H5T_NATIVE_DOUBLE, {kStuckValues}, 64);
+    h5::attr_string(m.stuck.id(), "columns",
+                    "a, b, normal_in_a[3], mu, lever, pivot_a[3], pivot_b[3], basis_a[9], basis_b[9], origin_a[3], "
+                    "origin_b[3] (Bullet body frames of a and b, m; matrices row-major)");
     Handle bake = h5::create_group(f, "bake");
     m.frames_done = h5::create_series(bake.id(), "frames_done", H5T_NATIVE_INT64, {}, 1);
     m.status = h5::create_series(bake.id(), "status", H5T_NATIVE_INT64, {}, 1);
@@ -318,7 +359,7 @@ void CacheWriter::append(int frame, double time, const sim::SimState& s, const s
   // Body origin (scene frame), orientation (w, x, y, z), COM velocity, forces.
   std::vector<double> pos, ori;
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 p = s.com_position[i] - s.orientation[i] * bodies[i].com;
+    const Vec3 p = sim::body_origin(s.com_position[i], s.orientation[i], bodies[i].com);
     pos.insert(pos.end(), {p[0], p[1], p[2]});
     const Quat& q = s.orientation[i];
     ori.insert(ori.end(), {q.w(), q.x(), q.y(), q.z()});
@@ -359,6 +400,11 @@ void CacheWriter::append(int frame, double time, const sim::SimState& s, const s
     if (s.induced_moment.size() != m.ninduced) throw h5::Error("induced moments: wrong count");
     h5::write_row(m.induced.id(), H5T_NATIVE_DOUBLE, row, flat(s.induced_moment).data());
   }
+  for (const sim::StuckJoint& j : s.stuck_joints) {
+    h5::write_row(m.stuck.id(), H5T_NATIVE_DOUBLE, m.stuck_rows++, stuck_row(j).data());
+  }
+  const std::int64_t nstuck = static_cast<std::int64_t>(s.stuck_joints.size());
+  h5::write_row(m.stuck_count.id(), H5T_NATIVE_INT64, row, &nstuck);
   const std::int64_t step = frame;
   h5::write_row(m.step.id(), H5T_NATIVE_INT64, row, &step);
   h5::write_row(m.time.id(), H5T_NATIVE_DOUBLE, row, &time);
@@ -406,6 +452,15 @@ void CacheWriter::copy_frames_from(const CacheReader& from, int count) {
          k >= kRequiredObservables);
   }
   if (m.ninduced > 0) copy("magnetics/induced_moment/value", m.induced.id(), H5T_NATIVE_DOUBLE);
+  copy("contacts/stuck_count", m.stuck_count.id(), H5T_NATIVE_INT64, true);
+  m.stuck_rows = 0;
+  if (!from.layout_.stuck_begin.empty()) {
+    const std::int64_t rows = from.layout_.stuck_begin.at(count);
+    for (std::int64_t r = 0; r < rows; ++r) {
+      const std::vector<double> v = h5::read_rows(from.file(), "contacts/stuck", hsize_t(r), 1);
+      h5::write_row(m.stuck.id(), H5T_NATIVE_DOUBLE, m.stuck_rows++, v.data());
+    }
+  }
   copy("frames/step", m.step.id(), H5T_NATIVE_INT64);
   copy("frames/time", m.time.id(), H5T_NATIVE_DOUBLE);
   h5::check(H5Fflush(m.file.id(), H5F_SCOPE_GLOBAL), "flush");
@@ -426,6 +481,7 @@ void CacheWriter::close() {
   impl_->body_series.clear();
   impl_->observables.clear();
   impl_->step.reset(), impl_->time.reset(), impl_->induced.reset(), impl_->frames_done.reset(), impl_->status.reset();
+  impl_->stuck_count.reset(), impl_->stuck.reset();
   // Closed once, by hand, so a failure (disk full) is reported; the handle never closes it again.
   const herr_t st = H5Fclose(impl_->file.release());
   h5::check(st, "close cache");
@@ -554,13 +610,37 @@ sim::SimState CacheReader::sim_state(int index, const scene::Scene& sc) const {
   s.time = fr.time;
   for (std::size_t i = 0; i < sc.bodies.size(); ++i) {
     s.orientation[i] = fr.orientation[i];
-    s.com_position[i] = fr.position[i] + fr.orientation[i] * sc.bodies[i].com;
+    s.com_position[i] = sim::com_from_origin(fr.position[i], fr.orientation[i], sc.bodies[i].com);
     s.velocity[i] = fr.velocity[i];
     s.angular_velocity[i] = fr.angular_velocity[i];
     s.magnetic_force[i] = fr.force[i];
     s.magnetic_torque[i] = fr.torque[i];
   }
   s.induced_moment = fr.induced_moment;
+  s.magnetic_energy = h5::read_rows(file(), "observables/magnetic_energy/value", index, 1).at(0);
+  if (!std::isfinite(s.magnetic_energy)) {
+    throw std::runtime_error(path_ + ": frame " + std::to_string(fr.frame) + " holds a non-finite magnetic energy");
+  }
+  if (!layout_.stuck_begin.empty()) {
+    const std::int64_t begin = layout_.stuck_begin[index], end = layout_.stuck_begin[index + 1];
+    const std::vector<double> rows =
+        end > begin ? h5::read_rows(file(), "contacts/stuck", hsize_t(begin), hsize_t(end - begin)) : std::vector<double>{};
+    const int n = static_cast<int>(sc.bodies.size());
+    for (std::int64_t r = 0; r < end - begin; ++r) {
+      const double* v = rows.data() + r * kStuckValues;
+      bool ok = v[0] >= 0 && v[0] < v[1] && v[1] < n && v[0] == std::floor(v[0]) && v[1] == std::floor(v[1]);
+      for (std::size_t k = 2; k < kStuckValues; ++k) ok = ok && std::isfinite(v[k]);
+      if (ok) {
+        const sim::StuckJoint j = stuck_joint(v);
+        ok = s.stuck_joints.empty() || std::make_pair(s.stuck_joints.back().a, s.stuck_joints.back().b) < std::make_pair(j.a, j.b);
+        if (ok) s.stuck_joints.push_back(j);
+      }
+      if (!ok) {
+        throw std::runtime_error(path_ + ": frame " + std::to_string(fr.frame) + " holds an invalid stuck joint (row " +
+                                 std::to_string(begin + r) + " of /contacts/stuck)");
+      }
+    }
+  }
   for (std::size_t i = 0; i < sc.bodies.size() && 2 * i + 1 < fr.sleep.size(); ++i) {
     const double state = fr.sleep[2 * i], rest = fr.sleep[2 * i + 1];
     if (!(state == 0 || state == 1 || state == 2) || !(rest >= 0 && rest < 1e12)) {

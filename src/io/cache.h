@@ -114,6 +114,7 @@ class CacheReader {
   hid_t file() const;
 
  private:
+  friend class CacheWriter;  // copy_frames_from reads the layout's stuck-joint offsets
   std::string path_;
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -220,7 +220,26 @@ CacheLayout check_cache_layout(hid_t f, std::int64_t frames_done) {
     series("particles/bodies/sleep_reference/value", {n, 6});
     L.sleep = true;
   }
+  // Optional (caches before 2026-12-06 lack them): both or neither.
+  const bool has_stuck = h5::exists(f, "contacts/stuck_count");
+  if (has_stuck || h5::exists(f, "contacts/stuck")) {
+    series("contacts/stuck_count", {});
+  }
   frames = std::min<std::int64_t>(frames, std::numeric_limits<int>::max());
+  if (has_stuck || h5::exists(f, "contacts/stuck")) {
+    const hsize_t rows = expect(f, "contacts/stuck", {kAny, kStuckValues})[0];
+    const std::vector<double> count = frames > 0 ? h5::read_rows(f, "contacts/stuck_count", 0, hsize_t(frames))
+                                                 : std::vector<double>{};
+    L.stuck_begin.assign(1, 0);
+    for (std::int64_t k = 0; k < frames; ++k) {
+      const double c = count[k];
+      if (!(c >= 0 && c <= double(rows) - double(L.stuck_begin.back())) || c != std::floor(c)) {
+        fail("/contacts/stuck_count[" + std::to_string(k) + "] does not fit the " + std::to_string(rows) +
+             " rows of /contacts/stuck");
+      }
+      L.stuck_begin.push_back(L.stuck_begin.back() + std::int64_t(c));
+    }
+  }
   if (frames > 0) {
     const std::vector<double> step = h5::read_rows(f, "frames/step", 0, hsize_t(frames));
     const std::vector<double> time = h5::read_rows(f, "frames/time", 0, hsize_t(frames));

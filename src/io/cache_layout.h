@@ -12,6 +12,9 @@
 
 namespace magbake::io {
 
+/// Doubles per row of /contacts/stuck (sim::StuckJoint::kValues).
+inline constexpr std::size_t kStuckValues = 37;
+
 /// What the layout check learned (counts the readers need).
 struct CacheLayout {
   std::size_t bodies = 0;     ///< rows of /bodies/name
@@ -19,6 +22,9 @@ struct CacheLayout {
   std::size_t parts = 0;      ///< magnetic parts
   std::size_t induced = 0;    ///< induced cells (rows of /magnetics/induced_cells)
   bool sleep = false;         ///< the optional sleep series are present (with the right shapes)
+  /// Optional stuck joints (/contacts): frame k's records are rows [stuck_begin[k],
+  /// stuck_begin[k + 1]) of /contacts/stuck (frames + 1 entries; empty when absent).
+  std::vector<std::int64_t> stuck_begin;
   int frames = 0;             ///< complete frames readable in every per-frame series
 };
 

@@ -164,6 +164,14 @@ struct State {
 
   /// Sizes every buffer for `model` (call once; evaluate() calls it when sizes differ).
   void resize(const Model& model);
+  /// Drops what one evaluation leaves for the next besides induced_moment: the cross-body
+  /// tensors (reused within a tolerance of the pose they were made at) and the fixed pairs'
+  /// forces. After it, the next evaluation depends only on the poses, the settings and
+  /// induced_moment (the simulator calls it at every frame, so a resumed bake matches).
+  void forget_caches() {
+    cross_tensors.clear();
+    fixed_pairs = FixedPairs{};
+  }
 };
 
 }  // namespace magbake::magnetics

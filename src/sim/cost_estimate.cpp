@@ -48,6 +48,7 @@ CostEstimate estimate_cost(const scene::Scene& scene, const magnetics::Model& mo
                                                                  kTrialExtension * max_steps, 1e9)));
   trial.last_frame = static_cast<int>(cap);
   Simulator sim(trial, model);
+  sim.set_restart_period(static_cast<int>(per_frame));  // at the bake's frames (Simulator::restart)
   const auto t0 = std::chrono::steady_clock::now();
   sim.initialize();
   // Per trial step: magnetics s, rigid s, substeps, evaluations, iterations, cell + node pairs.

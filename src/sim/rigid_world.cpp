@@ -159,11 +159,14 @@ class ContactWorld : public btDiscreteDynamicsWorld {
 struct RigidWorld::Impl {
   const scene::Scene& scene;
   btDefaultCollisionConfiguration config;
-  btCollisionDispatcher dispatcher{&config};
-  btDbvtBroadphase broadphase;
-  btSequentialImpulseConstraintSolver solver;
   SkinBoxBoxCreateFunc box_box;  // contacts from touching on (skin_contacts.h)
   SkinSphereSphereCreateFunc sphere_sphere;
+  // Bullet's world and what carries over between its steps (pair cache, contact manifolds,
+  // solver): made afresh by make_world() at every frame (RigidWorld::reset). Declared in the
+  // order they are built; the world is destroyed first.
+  std::unique_ptr<btCollisionDispatcher> dispatcher;
+  std::unique_ptr<btDbvtBroadphase> broadphase;
+  std::unique_ptr<btSequentialImpulseConstraintSolver> solver;
   std::unique_ptr<btDiscreteDynamicsWorld> world;
   std::vector<std::unique_ptr<btCollisionShape>> shapes;  // every shape, children included
   std::vector<std::unique_ptr<btTriangleMesh>> meshes;
@@ -194,6 +197,73 @@ struct RigidWorld::Impl {
   std::vector<Vec3> origin;
 
   explicit Impl(const scene::Scene& s) : scene(s) {}
+
+  // Every body at the state's pose and velocities (interpolation transform and velocities too,
+  // so nothing of the previous state is left in a body), activation from its sleep state.
+  void put_bodies(const SimState& s) {
+    for (std::size_t i = 0; i < bodies.size(); ++i) {
+      btRigidBody* b = bodies[i].get();
+      const btTransform tr = bullet_transform(int(i), s.orientation[i], s.com_position[i]);
+      b->setWorldTransform(tr);
+      b->setInterpolationWorldTransform(tr);
+      b->setCenterOfMassTransform(tr);
+      const bool dynamic = scene.bodies[i].motion == scene::Motion::kDynamic;
+      // Bullet's origin is the centre of mass for dynamic bodies.
+      const btVector3 v = dynamic ? bt(s.velocity[i]) : btVector3(0, 0, 0);
+      const btVector3 w = dynamic ? bt(s.angular_velocity[i]) : btVector3(0, 0, 0);
+      b->setLinearVelocity(v);
+      b->setAngularVelocity(w);
+      b->setInterpolationLinearVelocity(v);
+      b->setInterpolationAngularVelocity(w);
+      if (dynamic && sleep_time > 0 && i < s.sleep.size()) {
+        static constexpr int kBullet[] = {ACTIVE_TAG, WANTS_DEACTIVATION, ISLAND_SLEEPING};
+        b->forceActivationState(kBullet[std::min<int>(s.sleep[i], 2)]);
+        b->setDeactivationTime(btScalar(s.rest_time[i]));
+      } else if (dynamic) {
+        b->forceActivationState(DISABLE_DEACTIVATION);
+      }
+      b->clearForces();
+    }
+  }
+
+  // A new Bullet world with our settings and no bodies (the constructor and reset() add them).
+  void make_world() {
+    world.reset();
+    solver.reset();
+    broadphase.reset();
+    dispatcher.reset();
+    dispatcher = std::make_unique<btCollisionDispatcher>(&config);
+    broadphase = std::make_unique<btDbvtBroadphase>();
+    solver = std::make_unique<btSequentialImpulseConstraintSolver>();
+    world = std::make_unique<ContactWorld>(dispatcher.get(), broadphase.get(), solver.get(), &config, &magnetic, &aabb_pad);
+    dispatcher->registerCollisionCreateFunc(BOX_SHAPE_PROXYTYPE, BOX_SHAPE_PROXYTYPE, &box_box);
+    dispatcher->registerCollisionCreateFunc(SPHERE_SHAPE_PROXYTYPE, SPHERE_SHAPE_PROXYTYPE, &sphere_sphere);
+    world->setGravity(bt(scene.gravity));
+    world->getDispatchInfo().m_deterministicOverlappingPairs = true;
+    // Polyhedral pairs (a cylinder against a box, a cylinder or a triangle of a static mesh) clip
+    // their contact faces along the separating axis found by SAT, not along GJK's normal: with
+    // GJK's normal (computed between margin-shrunk cores) a cylinder lying on a box clipped the
+    // wrong facet while its rim sank 0.15 mm, and the late push-out gained 7-20% of the pair's
+    // binding energy at any dt (physics.md §8 item 10). The convex pieces of dynamic meshes have
+    // no polyhedral features and stay with GJK: given them, Bowl2008's iron digits (HACD pieces)
+    // against the bowl's triangles threw 28 bodies out of the scene.
+    world->getDispatchInfo().m_enableSatConvex = true;
+    btContactSolverInfo& si = world->getSolverInfo();
+    si.m_numIterations = 20;
+    // Stop iterating once no contact row changes a velocity by more than 1e-7 m/s (Bullet's
+    // residual is the largest squared velocity change of an iteration). Bullet's default, 0, runs
+    // all 20 iterations; measured on a magnetically held spinning pair (55 N pull, 1 cm cubes),
+    // the solve converges in 8-10 iterations to a residual of 1e-15, but carried on to 20 it ended
+    // at 1e-9, unconverged, and every few hundred substeps the pair "clacked": its cubes' spins
+    // jumped by up to 90 rad/s for a substep (tests/sim/contact_test.cpp, physics.md §8).
+    si.m_leastSquaresResidualThreshold = 1e-14;
+    // Every island in a solve of its own: Bullet batches small islands into one solve, and with the
+    // residual test above the batch's iteration count would depend on its other islands, so a
+    // body's motion would depend on unrelated bodies elsewhere in the scene (physics.md §8 item 9).
+    si.m_minimumSolverBatchSize = 1;
+    si.m_splitImpulse = 1;
+    si.m_splitImpulsePenetrationThreshold = -0.0002;  // cm-scale bodies (Bullet assumes metres)
+  }
 
   btCollisionShape* own(btCollisionShape* sh) {
     shapes.emplace_back(sh);
@@ -310,35 +380,8 @@ struct RigidWorld::Impl {
 RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>(scene)) {
   Impl& m = *impl_;
   m.sleep_time = scene.sleep_time;
-  m.world = std::make_unique<ContactWorld>(&m.dispatcher, &m.broadphase, &m.solver, &m.config, &m.magnetic, &m.aabb_pad);
   gContactAddedCallback = adjust_internal_edges;
-  m.dispatcher.registerCollisionCreateFunc(BOX_SHAPE_PROXYTYPE, BOX_SHAPE_PROXYTYPE, &m.box_box);
-  m.dispatcher.registerCollisionCreateFunc(SPHERE_SHAPE_PROXYTYPE, SPHERE_SHAPE_PROXYTYPE, &m.sphere_sphere);
-  m.world->setGravity(bt(scene.gravity));
-  m.world->getDispatchInfo().m_deterministicOverlappingPairs = true;
-  // Polyhedral pairs (a cylinder against a box, a cylinder or a triangle of a static mesh) clip
-  // their contact faces along the separating axis found by SAT, not along GJK's normal: with
-  // GJK's normal (computed between margin-shrunk cores) a cylinder lying on a box clipped the
-  // wrong facet while its rim sank 0.15 mm, and the late push-out gained 7-20% of the pair's
-  // binding energy at any dt (physics.md §8 item 10). The convex pieces of dynamic meshes have
-  // no polyhedral features and stay with GJK: given them, Bowl2008's iron digits (HACD pieces)
-  // against the bowl's triangles threw 28 bodies out of the scene.
-  m.world->getDispatchInfo().m_enableSatConvex = true;
-  btContactSolverInfo& si = m.world->getSolverInfo();
-  si.m_numIterations = 20;
-  // Stop iterating once no contact row changes a velocity by more than 1e-7 m/s (Bullet's
-  // residual is the largest squared velocity change of an iteration). Bullet's default, 0, runs
-  // all 20 iterations; measured on a magnetically held spinning pair (55 N pull, 1 cm cubes),
-  // the solve converges in 8-10 iterations to a residual of 1e-15, but carried on to 20 it ended
-  // at 1e-9, unconverged, and every few hundred substeps the pair "clacked": its cubes' spins
-  // jumped by up to 90 rad/s for a substep (tests/sim/contact_test.cpp, physics.md §8).
-  si.m_leastSquaresResidualThreshold = 1e-14;
-  // Every island in a solve of its own: Bullet batches small islands into one solve, and with the
-  // residual test above the batch's iteration count would depend on its other islands, so a
-  // body's motion would depend on unrelated bodies elsewhere in the scene (physics.md §8 item 9).
-  si.m_minimumSolverBatchSize = 1;
-  si.m_splitImpulse = 1;
-  si.m_splitImpulsePenetrationThreshold = -0.0002;  // cm-scale bodies (Bullet assumes metres)
+  m.make_world();
   m.principal.resize(scene.bodies.size(), Mat3::Identity());
   m.origin.resize(scene.bodies.size(), Vec3::Zero());
 
@@ -439,34 +482,19 @@ RigidWorld::~RigidWorld() {
 void RigidWorld::set_state(const SimState& s) {
   Impl& m = *impl_;
   m.stuck->clear(*m.world);
-  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
-    btRigidBody* b = m.bodies[i].get();
-    const btTransform tr = m.bullet_transform(int(i), s.orientation[i], s.com_position[i]);
-    b->setWorldTransform(tr);
-    b->setInterpolationWorldTransform(tr);
-    b->setCenterOfMassTransform(tr);
-    if (m.scene.bodies[i].motion == scene::Motion::kDynamic) {
-      // Bullet's origin is the centre of mass for dynamic bodies.
-      b->setLinearVelocity(bt(s.velocity[i]));
-      b->setAngularVelocity(bt(s.angular_velocity[i]));
-      if (m.sleep_time > 0 && i < s.sleep.size()) {
-        static constexpr int kBullet[] = {ACTIVE_TAG, WANTS_DEACTIVATION, ISLAND_SLEEPING};
-        b->forceActivationState(kBullet[std::min<int>(s.sleep[i], 2)]);
-        b->setDeactivationTime(btScalar(s.rest_time[i]));
-      }
-    } else {
-      b->setLinearVelocity(btVector3(0, 0, 0));
-      b->setAngularVelocity(btVector3(0, 0, 0));
-    }
-    b->clearForces();
-  }
+  m.put_bodies(s);
 }
 
-void RigidWorld::refresh_pairs() {
+void RigidWorld::reset(const SimState& s) {
   Impl& m = *impl_;
+  m.stuck->clear(*m.world);
+  for (auto& b : m.bodies) m.world->removeRigidBody(b.get());
+  m.make_world();
+  m.put_bodies(s);
+  for (auto& b : m.bodies) m.world->addRigidBody(b.get());
+  m.stuck->restore(*m.world, m.bodies, s.stuck_joints);
   gDbvtMargin = m.dbvt_margin;
-  m.world->updateAabbs();
-  m.world->getBroadphase()->calculateOverlappingPairs(m.world->getDispatcher());
+  m.world->performDiscreteCollisionDetection();
 }
 
 void RigidWorld::get_state(SimState& s) const {
@@ -490,6 +518,7 @@ void RigidWorld::get_state(SimState& s) const {
       s.rest_time[i] = m.sleep_time > 0 && m.scene.bodies[i].motion == scene::Motion::kDynamic ? b->getDeactivationTime() : 0.0;
     }
   }
+  m.stuck->save(s.stuck_joints);
 }
 
 bool RigidWorld::asleep(int i) const { return impl_->bodies[i]->getActivationState() == ISLAND_SLEEPING; }
@@ -543,7 +572,7 @@ void RigidWorld::step(double t, double h, const std::vector<Vec3>& force, const 
   if (m.sleep_time > 0) gDeactivationTime = btScalar(m.sleep_time);
   m.stuck->before_step();
   m.world->stepSimulation(h, 0, h);
-  m.stuck->after_step(*m.world, m.dispatcher, m.bodies, h);
+  m.stuck->after_step(*m.world, *m.dispatcher, m.bodies, h);
   for (const Saved& sv : saved) {
     btRigidBody* b = m.bodies[sv.body].get();
     b->forceActivationState(sv.state);
@@ -641,7 +670,7 @@ void RigidWorld::closing_rates(std::vector<double>& rate) const {
 RigidWorld::Penetration RigidWorld::deepest_penetration() const {
   const Impl& m = *impl_;
   Penetration out;
-  btCollisionDispatcher& d = const_cast<btCollisionDispatcher&>(m.dispatcher);
+  btCollisionDispatcher& d = *m.dispatcher;
   for (int k = 0; k < d.getNumManifolds(); ++k) {
     const btPersistentManifold* mf = d.getManifoldByIndexInternal(k);
     for (int c = 0; c < mf->getNumContacts(); ++c) {
@@ -664,7 +693,7 @@ void RigidWorld::contact_normals(std::vector<std::vector<Vec3>>& out, std::vecto
   }
   if (face_slip) face_slip->assign(m.scene.bodies.size(), 0.0);
   if (partner_speed) partner_speed->assign(m.scene.bodies.size(), 0.0);
-  btCollisionDispatcher& d = const_cast<btCollisionDispatcher&>(m.dispatcher);
+  btCollisionDispatcher& d = *m.dispatcher;
   for (int k = 0; k < d.getNumManifolds(); ++k) {
     const btPersistentManifold* mf = d.getManifoldByIndexInternal(k);
     const int a = mf->getBody0()->getUserIndex(), b = mf->getBody1()->getUserIndex();
@@ -729,8 +758,8 @@ std::vector<RigidWorld::Penetration> RigidWorld::separate_overlaps(double tolera
     gDbvtMargin = m.dbvt_margin;
     m.world->performDiscreteCollisionDetection();
     double worst = 0;
-    for (int k = 0; k < m.dispatcher.getNumManifolds(); ++k) {
-      btPersistentManifold* mf = m.dispatcher.getManifoldByIndexInternal(k);
+    for (int k = 0; k < m.dispatcher->getNumManifolds(); ++k) {
+      btPersistentManifold* mf = m.dispatcher->getManifoldByIndexInternal(k);
       auto* b0 = const_cast<btRigidBody*>(btRigidBody::upcast(mf->getBody0()));
       auto* b1 = const_cast<btRigidBody*>(btRigidBody::upcast(mf->getBody1()));
       if (!b0 || !b1) continue;
@@ -766,7 +795,7 @@ std::vector<RigidWorld::Penetration> RigidWorld::separate_overlaps(double tolera
   // N x pairs, 12% of the first second of a 10,000-body bake.)
   btOverlappingPairCache* pair_cache = m.world->getBroadphase()->getOverlappingPairCache();
   btBroadphasePairArray& all_pairs = pair_cache->getOverlappingPairArray();
-  for (int k = 0; k < all_pairs.size(); ++k) pair_cache->cleanOverlappingPair(all_pairs[k], &m.dispatcher);
+  for (int k = 0; k < all_pairs.size(); ++k) pair_cache->cleanOverlappingPair(all_pairs[k], m.dispatcher.get());
   std::vector<Penetration> out;
   for (const auto& [key, depth] : first) out.push_back({key.first, key.second, depth});
   std::sort(out.begin(), out.end(), [](const Penetration& x, const Penetration& y) { return x.depth > y.depth; });

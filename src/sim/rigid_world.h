@@ -21,11 +21,14 @@ class RigidWorld {
 
   /// Puts every body at the state's poses and velocities (initial state or a resumed frame).
   void set_state(const SimState& s);
-  /// Brings Bullet's pair cache up to date with the current poses (bounding boxes and their
-  /// overlaps, no contacts): after set_state() of a resumed frame, so that islands() and
-  /// closing_rates() see the bodies' neighbours before the first step.
-  void refresh_pairs();
-  /// Reads poses and velocities back (centre-of-mass frames, body axes).
+  /// Starts Bullet afresh at the state: a new world (broadphase, pair cache, contact manifolds,
+  /// constraint solver) with every body added in scene order at the state's pose, velocities and
+  /// sleep state, the state's stuck joints (SimState::stuck_joints) made again, and one collision
+  /// detection, so that the contacts of the first step are known. Nothing of the steps before is
+  /// kept: the simulator calls it at every frame, and a bake resumed from a cache frame goes on
+  /// from the same world as the uninterrupted bake (physics.md §8, cache-format.md).
+  void reset(const SimState& s);
+  /// Reads poses, velocities, sleep states and stuck joints back (centre-of-mass frames, body axes).
   void get_state(SimState& s) const;
   /// Advances by h seconds: kinematic bodies move to their keyed pose at t + h (their velocity
   /// follows from the finite difference), dynamic bodies feel gravity plus the given magnetic

@@ -19,6 +19,31 @@ enum SleepState : std::uint8_t {
   kAsleep = 2,   ///< not stepped; woken by a contact or a change of its magnetic force
 };
 
+/// A stuck contact (StuckContacts): bodies a < b (scene indices) held at their relative pose by
+/// a point-to-point joint and a joint locking their relative turn. Part of the state, so that a
+/// bake resumed from a cache frame holds the same pairs with the same joints. Frames are Bullet's
+/// body frames (centre of mass, principal axes); all values are copied bit for bit.
+struct StuckJoint {
+  int a = -1, b = -1;
+  Vec3 normal_in_a = Vec3::Zero();  ///< unit contact normal in a's frame, pushing a away from b
+  double mu = 0;                    ///< the contact's combined friction coefficient
+  double lever = 0;                 ///< lever of the tilt and twist limits, m
+  Vec3 pivot_a = Vec3::Zero(), pivot_b = Vec3::Zero();  ///< the joint point in a's and b's frames, m
+  Mat3 basis_a = Mat3::Identity(), basis_b = Mat3::Identity();  ///< turn joint frame axes in a's, b's frames
+  Vec3 origin_a = Vec3::Zero(), origin_b = Vec3::Zero();  ///< turn joint frame origins in a's, b's frames, m
+  /// Number of doubles in a flat record (cache row): a, b, then the members in declaration
+  /// order, matrices row-major.
+  static constexpr int kValues = 37;
+};
+
+/// The body origin (scene body frame) of a body whose centre of mass is at `com_world` (world,
+/// m), turned by q, with its centre of mass at `com_body` in the body frame. The cache stores
+/// this; com_from_origin() undoes it. Simulator rounds every frame's state through both, so a
+/// state read back from a cache is bit for bit the state the bake went on from.
+inline Vec3 body_origin(const Vec3& com_world, const Quat& q, const Vec3& com_body) { return com_world - q * com_body; }
+/// The centre of mass (world, m) of a body whose origin is at `origin` (world, m).
+inline Vec3 com_from_origin(const Vec3& origin, const Quat& q, const Vec3& com_body) { return origin + q * com_body; }
+
 /// State of every body at one instant. Poses are of the centre-of-mass frame with the body's
 /// own axes (scene body frame shifted to the centre of mass), world frame.
 struct SimState {
@@ -29,6 +54,7 @@ struct SimState {
   std::vector<Vec3> angular_velocity;    ///< (nbody x 3) world, rad/s
   std::vector<Vec3> magnetic_force;      ///< (nbody x 3) last substep's, N
   std::vector<Vec3> magnetic_torque;     ///< (nbody x 3) last substep's, about the COM, N·m
+  double magnetic_energy = 0;            ///< J, pair energy of the evaluation that gave the forces above
   std::vector<Vec3> induced_moment;      ///< (ninduced x 3) world, A·m² (Model::induced_cells order)
   // Sleeping (Scene::sleep_time; saved in the cache so that a resumed bake sleeps as the
   // uninterrupted one does). Static and kinematic bodies stay kAwake with rest_time 0.
@@ -36,6 +62,8 @@ struct SimState {
   std::vector<double> rest_time;         ///< (nbody) s the body has been below its sleep speeds
   std::vector<Vec3> sleep_force;         ///< (nbody x 3) magnetic force when it fell asleep, N (wake-up reference)
   std::vector<Vec3> sleep_torque;        ///< (nbody x 3) magnetic torque then, N·m
+  /// Stuck contacts now, by (a, b) (RigidWorld::get_state fills it; RigidWorld::reset remakes them).
+  std::vector<StuckJoint> stuck_joints;
 
   void resize(std::size_t nbody) {
     com_position.assign(nbody, Vec3::Zero());

@@ -68,21 +68,32 @@ void Simulator::initialize() {
   frame_ = scene_.first_frame;
   FrameDiagnostics d;
   evaluate_magnetics(d);  // forces of the first frame (reported in the cache)
-  last_energy_ = measure().total_energy();
+  restart();
 }
 
 void Simulator::restore(const SimState& s, int frame) {
   state_ = s;
   assert(state_.sleep.size() == scene_.bodies.size());  // SimState::resize sizes it (all awake)
-  world_->set_state(state_);
-  world_->refresh_pairs();  // islands and closing rates of the first step see the neighbours
+  frame_ = frame;
+  // The frame's forces, induced moments and energy as stored: not evaluated again (a solve warm
+  // started from its own converged moments would end elsewhere within its tolerance).
+  if (state_.induced_moment.size() == model_.induced_cells.size()) mag_state_.induced_moment = state_.induced_moment;
+  mag_result_.energy = state_.magnetic_energy;
+  restart();
+}
+
+void Simulator::restart() {
+  // Poses as the cache stores them (body origins), and back.
+  for (std::size_t i = 0; i < scene_.bodies.size(); ++i) {
+    const Vec3& com = scene_.bodies[i].com;
+    state_.com_position[i] = com_from_origin(body_origin(state_.com_position[i], state_.orientation[i], com),
+                                             state_.orientation[i], com);
+  }
+  world_->reset(state_);
   refresh_contacts();
   sleep_reference_set_.assign(scene_.bodies.size(), 0);
   for (std::size_t i = 0; i < state_.sleep.size(); ++i) sleep_reference_set_[i] = state_.sleep[i] == kAsleep;
-  frame_ = frame;
-  if (state_.induced_moment.size() == model_.induced_cells.size()) mag_state_.induced_moment = state_.induced_moment;
-  FrameDiagnostics d;
-  evaluate_magnetics(d);
+  mag_state_.forget_caches();
   last_energy_ = measure().total_energy();
 }
 
@@ -98,6 +109,7 @@ void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
   magnetics::evaluate(model_, settings_, mag_state_, mag_result_);
   state_.magnetic_force = mag_result_.force;
   state_.magnetic_torque = mag_result_.torque;
+  state_.magnetic_energy = mag_result_.energy;
   state_.induced_moment = mag_state_.induced_moment;
   d.magnetics_seconds += seconds_since(t0);
   d.cells_visited += mag_result_.stats.cell_pairs + mag_result_.stats.node_pairs;
@@ -345,9 +357,10 @@ FrameDiagnostics Simulator::advance_frame() {
   d.angular_momentum = m.angular_momentum;
   d.max_speed = m.max_speed;
   d.max_speed_body = m.max_speed_body;
-  const double energy = d.total_energy();
-  d.energy_drift = energy - last_energy_;
-  last_energy_ = energy;
+  d.energy_drift = d.total_energy() - last_energy_;
+  last_energy_ = d.total_energy();
+  // What the cache holds of this frame is all the next one starts from.
+  if ((frame_ - scene_.first_frame) % restart_period_ == 0) restart();
   return d;
 }
 

@@ -1,6 +1,7 @@
 // The step loop: magnetics (src/magnetics) and rigid bodies (Bullet) advanced together.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -57,7 +58,10 @@ class Simulator {
 
   /// Sets the initial state (frame `first_frame`): poses from the scene, initial velocities.
   void initialize();
-  /// Sets a state read back from a cache (resume); `frame` is the frame it belongs to.
+  /// Sets a state read back from a cache (resume); `frame` is the frame it belongs to. Its
+  /// forces, induced moments and magnetic energy are taken as stored. A bake resumed this way
+  /// continues bit for bit as the uninterrupted bake: every frame ends in restart(), so nothing
+  /// but the state (and what the cache holds of it) carries over from one frame to the next.
   void restore(const SimState& state, int frame);
   /// Advances from the current frame to the next; returns what happened in between.
   FrameDiagnostics advance_frame();
@@ -81,6 +85,11 @@ class Simulator {
   /// in a point or line contact). Soft spheres leave it out.
   static constexpr double kPressedStiffness = 0.75;
 
+  /// Restarts (restart()) at every `frames`-th frame from the first instead of every frame: for
+  /// the cost trial (estimate_cost), whose frames are single substeps, so that it restarts
+  /// where the bake does. 1 by default.
+  void set_restart_period(int frames) { restart_period_ = std::max(1, frames); }
+
   /// A callback that may change the state after every magnetics evaluation, before the state is
   /// checked for non-finite values and stepped; `frame` is the frame being computed. A test
   /// seam (e.g. to poison a force and see the fault handled); unset in production.
@@ -89,6 +98,12 @@ class Simulator {
 
  private:
   void evaluate_magnetics(FrameDiagnostics& d);
+  /// Ends a frame (and initialize(), restore()): rounds the poses through the cache's form
+  /// (body origins), starts Bullet afresh at state_ (RigidWorld::reset: contacts, pair cache and
+  /// warm starts of earlier steps dropped, stuck joints remade from state_), drops the
+  /// magnetics' caches (magnetics::State::forget_caches) and re-derives everything else kept
+  /// between steps (contact normals, sleep references, the energy baseline) from state_ alone.
+  void restart();
   /// Gathers the contact normals of Bullet's last collision detection into contact_normals_
   /// (once per step; read by update_sleep and body_splits).
   void refresh_contacts();
@@ -137,6 +152,7 @@ class Simulator {
   std::vector<std::uint8_t> sleep_reference_set_;  // per body: asleep and its reference taken
   double last_energy_ = 0;  // total energy at the current frame, J (for energy_drift)
   StateHook after_magnetics_;
+  int restart_period_ = 1;  // frames between restarts (set_restart_period)
 };
 
 }  // namespace magbake::sim

@@ -12,6 +12,15 @@ namespace {
 
 Vec3 eig(const btVector3& v) { return Vec3(v.x(), v.y(), v.z()); }
 btVector3 bt(const Vec3& v) { return btVector3(v[0], v[1], v[2]); }
+Mat3 mat(const btMatrix3x3& m) {
+  Mat3 out;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out(r, c) = m[r][c];
+  return out;
+}
+btMatrix3x3 bt(const Mat3& m) {
+  return btMatrix3x3(m(0, 0), m(0, 1), m(0, 2), m(1, 0), m(1, 1), m(1, 2), m(2, 0), m(2, 1), m(2, 2));
+}
 
 // Relative speed (m/s) below which a face contact counts as at rest: its points move by less
 // than this fraction of the smaller body's smallest extent over the step.
@@ -54,11 +63,9 @@ bool spans_face(const Vec3* p, int n, double size) {
   return area2 >= 0.01 * size * size;
 }
 
-struct StuckContacts::Joint {
-  int a = -1, b = -1;
-  Vec3 normal_in_a;  // unit contact normal in A's Bullet frame, pushing A away from B
-  double mu = 0;     // the contact's combined friction coefficient
-  double lever = 0;  // kLeverShare x the contact points' mean distance from their centroid, m
+// A joint's record (a, b, normal_in_a, mu, lever: kLeverShare x the contact points' mean distance
+// from their centroid, or the roll lever; frames) and its Bullet constraints.
+struct StuckContacts::Joint : StuckJoint {
   std::unique_ptr<btPoint2PointConstraint> point;  // at the contact's centroid
   std::unique_ptr<btGeneric6DofSpring2Constraint> turn;  // turns locked, translations free
   btJointFeedback point_feedback, turn_feedback;
@@ -163,6 +170,48 @@ void StuckContacts::before_step() {
 void StuckContacts::remove(btDiscreteDynamicsWorld& world, Joint& j) {
   world.removeConstraint(j.point.get());
   world.removeConstraint(j.turn.get());
+}
+
+void StuckContacts::add(btDiscreteDynamicsWorld& world, const std::vector<std::unique_ptr<btRigidBody>>& bodies,
+                        const StuckJoint& rec) {
+  btRigidBody& ra = *bodies[rec.a];
+  btRigidBody& rb = *bodies[rec.b];
+  auto joint = std::make_unique<Joint>();
+  static_cast<StuckJoint&>(*joint) = rec;
+  joint->point = std::make_unique<btPoint2PointConstraint>(ra, rb, bt(rec.pivot_a), bt(rec.pivot_b));
+  joint->turn = std::make_unique<btGeneric6DofSpring2Constraint>(ra, rb, btTransform(bt(rec.basis_a), bt(rec.origin_a)),
+                                                                 btTransform(bt(rec.basis_b), bt(rec.origin_b)));
+  joint->turn->setLinearLowerLimit(btVector3(1, 1, 1));  // lower > upper: free
+  joint->turn->setLinearUpperLimit(btVector3(-1, -1, -1));
+  joint->turn->setAngularLowerLimit(btVector3(0, 0, 0));
+  joint->turn->setAngularUpperLimit(btVector3(0, 0, 0));
+  joint->point->setJointFeedback(&joint->point_feedback);
+  joint->turn->setJointFeedback(&joint->turn_feedback);
+  world.addConstraint(joint->point.get(), true);
+  world.addConstraint(joint->turn.get(), true);
+  joints_.emplace(std::make_pair(rec.a, rec.b), std::move(joint));
+}
+
+void StuckContacts::save(std::vector<StuckJoint>& out) const {
+  out.clear();
+  for (const auto& [key, j] : joints_) out.push_back(static_cast<const StuckJoint&>(*j));
+}
+
+void StuckContacts::restore(btDiscreteDynamicsWorld& world, const std::vector<std::unique_ptr<btRigidBody>>& bodies,
+                            const std::vector<StuckJoint>& joints) {
+  clear(world);
+  for (const StuckJoint& rec : joints) {
+    assert(rec.a >= 0 && rec.a < rec.b && rec.b < static_cast<int>(bodies.size()));
+    add(world, bodies, rec);
+  }
+  // The velocities of the state as the last step's: the balance test of the next step sees the
+  // change over that step, as it would have without the restart.
+  last_v_.resize(bodies_.size());
+  last_w_.resize(bodies_.size());
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    last_v_[i] = eig(bodies[i]->getLinearVelocity());
+    last_w_[i] = eig(bodies[i]->getAngularVelocity());
+  }
 }
 
 void StuckContacts::clear(btDiscreteDynamicsWorld& world) {
@@ -332,38 +381,31 @@ void StuckContacts::after_step(btDiscreteDynamicsWorld& world, btCollisionDispat
         friction.length() > kFrictionShare * mu * pressed) {
       continue;
     }
-    auto joint = std::make_unique<Joint>();
-    joint->a = a, joint->b = b;
+    StuckJoint rec;
+    rec.a = a, rec.b = b;
     // Bullet's normal on B points towards body 0; A is the key's first body.
     const btVector3 normal = mf->getContactPoint(0).m_normalWorldOnB * (mf->getBody0() == &ra ? 1.0 : -1.0);
-    joint->normal_in_a = eig(ra.getWorldTransform().getBasis().transpose() * normal);
-    joint->mu = mu;
+    rec.normal_in_a = eig(ra.getWorldTransform().getBasis().transpose() * normal);
+    rec.mu = mu;
     Vec3 centroid = Vec3::Zero();
     for (int i = 0; i < n; ++i) centroid += p[i] / n;
     if (face) {
-      for (int i = 0; i < n; ++i) joint->lever += kLeverShare * (p[i] - centroid).norm() / n;
+      for (int i = 0; i < n; ++i) rec.lever += kLeverShare * (p[i] - centroid).norm() / n;
     } else {
       const double d = (eig(ra.getCenterOfMassPosition()) - eig(rb.getCenterOfMassPosition())).norm();
-      joint->lever = kRollTolerance * d / 3.0;
+      rec.lever = kRollTolerance * d / 3.0;
     }
-    joint->point = std::make_unique<btPoint2PointConstraint>(ra, rb, ra.getWorldTransform().inverse() * bt(centroid),
-                                                             rb.getWorldTransform().inverse() * bt(centroid));
+    rec.pivot_a = eig(ra.getWorldTransform().inverse() * bt(centroid));
+    rec.pivot_b = eig(rb.getWorldTransform().inverse() * bt(centroid));
     btTransform at;
     at.setIdentity();
     at.setOrigin(bt(centroid));
-    joint->turn = std::make_unique<btGeneric6DofSpring2Constraint>(ra, rb, ra.getWorldTransform().inverse() * at,
-                                                                   rb.getWorldTransform().inverse() * at);
-    joint->turn->setLinearLowerLimit(btVector3(1, 1, 1));  // lower > upper: free
-    joint->turn->setLinearUpperLimit(btVector3(-1, -1, -1));
-    joint->turn->setAngularLowerLimit(btVector3(0, 0, 0));
-    joint->turn->setAngularUpperLimit(btVector3(0, 0, 0));
-    joint->point->setJointFeedback(&joint->point_feedback);
-    joint->turn->setJointFeedback(&joint->turn_feedback);
+    const btTransform fa = ra.getWorldTransform().inverse() * at, fb = rb.getWorldTransform().inverse() * at;
+    rec.basis_a = mat(fa.getBasis()), rec.origin_a = eig(fa.getOrigin());
+    rec.basis_b = mat(fb.getBasis()), rec.origin_b = eig(fb.getOrigin());
     // The pair no longer collides (its contact is the joint now); its stale points are dropped.
-    world.addConstraint(joint->point.get(), true);
-    world.addConstraint(joint->turn.get(), true);
+    add(world, bodies, rec);
     mf->clearManifold();
-    joints_.emplace(key, std::move(joint));
   }
   last_v_.resize(bodies_.size());
   last_w_.resize(bodies_.size());

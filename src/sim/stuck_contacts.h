@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "magnetics/types.h"
+#include "sim_state.h"
 
 class btCollisionDispatcher;
 class btDiscreteDynamicsWorld;
@@ -91,6 +92,13 @@ class StuckContacts {
                   const std::vector<std::unique_ptr<btRigidBody>>& bodies, double h);
   /// Removes every joint and forgets the last step's velocities (a new state was set).
   void clear(btDiscreteDynamicsWorld& world);
+  /// The joints now, in (a, b) order (SimState::stuck_joints).
+  void save(std::vector<StuckJoint>& out) const;
+  /// Replaces the joints by `joints` (records of save(), e.g. from a cache; a < b, valid
+  /// indices), added to `world` in their order, and takes the bodies' current velocities as the
+  /// last step's (the balance test of after_step()).
+  void restore(btDiscreteDynamicsWorld& world, const std::vector<std::unique_ptr<btRigidBody>>& bodies,
+               const std::vector<StuckJoint>& joints);
   /// Appends, per scene body, the contact normal of each of its stuck contacts (world frame,
   /// pushing the body away from its partner) to `out`, and a 1 to `stuck` (optional) beside it.
   /// Held pairs have no contact points of their own (RigidWorld::contact_normals).
@@ -103,6 +111,8 @@ class StuckContacts {
  private:
   struct Joint;
   static void remove(btDiscreteDynamicsWorld& world, Joint& joint);
+  /// Makes the joints of `rec` and adds them to `world`.
+  void add(btDiscreteDynamicsWorld& world, const std::vector<std::unique_ptr<btRigidBody>>& bodies, const StuckJoint& rec);
   std::vector<Body> bodies_;
   std::vector<Vec3> moved_force_, moved_torque_;  // per body: share()'s change to its force, torque
   std::vector<Vec3> last_v_, last_w_;  // per body: velocities after the previous step (m/s, rad/s)
