@@ -400,9 +400,13 @@ void CacheWriter::append(int frame, double time, const sim::SimState& s, const s
     if (s.induced_moment.size() != m.ninduced) throw h5::Error("induced moments: wrong count");
     h5::write_row(m.induced.id(), H5T_NATIVE_DOUBLE, row, flat(s.induced_moment).data());
   }
+  std::vector<double> joints;
   for (const sim::StuckJoint& j : s.stuck_joints) {
-    h5::write_row(m.stuck.id(), H5T_NATIVE_DOUBLE, m.stuck_rows++, stuck_row(j).data());
+    const std::vector<double> r = stuck_row(j);
+    joints.insert(joints.end(), r.begin(), r.end());
   }
+  h5::write_rows(m.stuck.id(), H5T_NATIVE_DOUBLE, m.stuck_rows, s.stuck_joints.size(), joints.data());
+  m.stuck_rows += s.stuck_joints.size();
   const std::int64_t nstuck = static_cast<std::int64_t>(s.stuck_joints.size());
   h5::write_row(m.stuck_count.id(), H5T_NATIVE_INT64, row, &nstuck);
   const std::int64_t step = frame;
@@ -455,11 +459,12 @@ void CacheWriter::copy_frames_from(const CacheReader& from, int count) {
   copy("contacts/stuck_count", m.stuck_count.id(), H5T_NATIVE_INT64, true);
   m.stuck_rows = 0;
   if (!from.layout_.stuck_begin.empty()) {
-    const std::int64_t rows = from.layout_.stuck_begin.at(count);
-    for (std::int64_t r = 0; r < rows; ++r) {
-      const std::vector<double> v = h5::read_rows(from.file(), "contacts/stuck", hsize_t(r), 1);
-      h5::write_row(m.stuck.id(), H5T_NATIVE_DOUBLE, m.stuck_rows++, v.data());
+    const hsize_t rows = hsize_t(from.layout_.stuck_begin.at(count));
+    if (rows > 0) {
+      const std::vector<double> v = h5::read_rows(from.file(), "contacts/stuck", 0, rows);
+      h5::write_rows(m.stuck.id(), H5T_NATIVE_DOUBLE, 0, rows, v.data());
     }
+    m.stuck_rows = rows;
   }
   copy("frames/step", m.step.id(), H5T_NATIVE_INT64);
   copy("frames/time", m.time.id(), H5T_NATIVE_DOUBLE);

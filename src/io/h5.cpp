@@ -166,22 +166,25 @@ Handle create_series(hid_t parent, const std::string& name, hid_t type, const st
   return d;
 }
 
-void write_row(hid_t dataset, hid_t type, hsize_t index, const void* row) {
+void write_row(hid_t dataset, hid_t type, hsize_t index, const void* row) { write_rows(dataset, type, index, 1, row); }
+
+void write_rows(hid_t dataset, hid_t type, hsize_t first, hsize_t rows, const void* data) {
+  if (rows == 0) return;
   Handle fs(H5Dget_space(dataset));
   const int rank = H5Sget_simple_extent_ndims(fs.id());
   std::vector<hsize_t> dims(rank);
   H5Sget_simple_extent_dims(fs.id(), dims.data(), nullptr);
-  if (dims[0] < index + 1) {
-    dims[0] = index + 1;
+  if (dims[0] < first + rows) {
+    dims[0] = first + rows;
     check(H5Dset_extent(dataset, dims.data()), "extend dataset");
   }
   Handle file_space(H5Dget_space(dataset));
   std::vector<hsize_t> start(rank, 0), count = dims;
-  start[0] = index;
-  count[0] = 1;
-  check(H5Sselect_hyperslab(file_space.id(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr), "select row");
+  start[0] = first;
+  count[0] = rows;
+  check(H5Sselect_hyperslab(file_space.id(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr), "select rows");
   Handle mem(H5Screate_simple(rank, count.data(), nullptr));
-  check(H5Dwrite(dataset, type, mem.id(), file_space.id(), H5P_DEFAULT, row), "write row");
+  check(H5Dwrite(dataset, type, mem.id(), file_space.id(), H5P_DEFAULT, data), "write rows");
 }
 
 bool exists(hid_t parent, const std::string& path) {

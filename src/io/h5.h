@@ -69,6 +69,8 @@ Handle create_series(hid_t parent, const std::string& name, hid_t type, const st
                      hsize_t chunk_frames, const std::string& unit = "");
 /// Writes row `index` of a series (extending it to index + 1 rows).
 void write_row(hid_t dataset, hid_t type, hsize_t index, const void* row);
+/// Writes rows [first, first + rows) of a series from `data` (rows x the row size), extending it.
+void write_rows(hid_t dataset, hid_t type, hsize_t first, hsize_t rows, const void* data);
 
 // ---- reading
 bool exists(hid_t parent, const std::string& path);
