@@ -46,7 +46,7 @@ fs::path cache_path_for(const scene::Scene& s, const std::string& out_dir) {
 }
 
 int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
-             const Global& g, bool strict, bool allow_absolute, const BakeHooks& hooks, bool cache_only) {
+             const Global& g, bool strict, bool allow_absolute, const BakeHooks& hooks, bool cache_only, bool force) {
   auto loaded = load_or_report(path);
   if (!loaded) return kUsage;
   const scene::Scene& s = *loaded;
@@ -105,6 +105,12 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
     return kFailure;
   }
 
+  // A complete cache is a finished bake: replaced only when asked (--resume finds it complete).
+  if (!resume && !force && fs::exists(cache)) {
+    spdlog::error("{} is already a complete bake: --force replaces it (or bake into another folder with -o)", cache.string());
+    return kUsage;
+  }
+
   magnetics::Model model;
   try {
     model = scene::build_magnetics_model(s);
@@ -120,6 +126,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
   fs::path writing = partial;
   std::unique_ptr<io::CacheWriter> writer;
   int next_frame = 0;  // the next frame to write
+  int kept = 0;        // frames kept from an interrupted bake (--resume)
   try {
     std::optional<io::CacheReader> previous;
     if (resume) {
@@ -144,6 +151,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
       writer = std::make_unique<io::CacheWriter>(writing.string(), s, model, MAGBAKE_VERSION);
       writer->copy_frames_from(*previous, k);
       simulator.restore(previous->sim_state(k - 1, s), last_good.frame);
+      kept = k;
       next_frame = last_good.frame + 1;
       spdlog::info("resuming after frame {} ({} frames kept from {})", last_good.frame, k, partial.string());
       previous.reset();
@@ -246,8 +254,9 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
   }
   if (writing != partial) fs::remove(partial, ec);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  spdlog::info("wrote {} ({} frames) in {:.2f} s: magnetics {:.2f} s, rigid bodies {:.2f} s", cache.string(), written,
-               wall, magnetics_seconds, rigid_seconds);
+  spdlog::info("wrote {} ({} frames{}) in {:.2f} s: magnetics {:.2f} s, rigid bodies {:.2f} s", cache.string(), kept + written,
+               kept > 0 ? fmt::format(": {} kept from the interrupted bake, {} baked now", kept, written) : "", wall,
+               magnetics_seconds, rigid_seconds);
   for (const std::string& w : health.warnings()) warnings.push_back(w), spdlog::warn("{}", w);
   if (!warnings.empty()) {
     spdlog::warn("{} warning(s) for {}{}", warnings.size(), cache.string(),

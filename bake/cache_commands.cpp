@@ -20,7 +20,11 @@ int cmd_diff(const std::string& a_path, const std::string& b_path, const io::Dif
                   o.exact ? "bit for bit" : "within tolerances");
       return kOk;
     }
-    std::printf("%-20s %-18s %12s %14s %12s\n", "body", "quantity", "first frame", "largest diff", "at frame");
+    if (r.deviations.empty()) {
+      std::printf("the %d frames both hold are the same (%s)\n", r.frames_compared, o.exact ? "bit for bit" : "within tolerances");
+    } else {
+      std::printf("%-20s %-18s %12s %14s %12s\n", "body", "quantity", "first frame", "largest diff", "at frame");
+    }
     for (const io::Deviation& d : r.deviations) {
       std::printf("%-20s %-18s %12d %14.6g %12d\n", d.body.empty() ? "-" : d.body.c_str(), d.quantity.c_str(),
                   d.first_frame, d.largest, d.largest_frame);

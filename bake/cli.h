@@ -53,10 +53,11 @@ struct BakeHooks {
 };
 
 /// `bake`: `allow_absolute` lets absolute output paths of the scene be used (scene/output_path.h).
-/// `cache_only` skips the field volumes and previews that the scene's outputs ask for.
+/// `cache_only` skips the field volumes and previews that the scene's outputs ask for. A
+/// complete cache of the same name is replaced only with `force` (else exit 2, nothing touched).
 int cmd_bake(const std::string& path, const std::string& out_dir, const std::string& frames, bool resume,
              const Global& g, bool strict = false, bool allow_absolute = false, const BakeHooks& hooks = {},
-             bool cache_only = false);
+             bool cache_only = false, bool force = false);
 int cmd_info_cache(const std::string& path, bool all_bodies = false);
 int cmd_info(const std::string& path, const Global& g);
 int cmd_eval(const std::string& path, double time, bool json, const Global& g);

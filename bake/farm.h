@@ -22,6 +22,7 @@ struct FarmRequest {
   int warning_seconds = 120;   ///< the simulation job gets SIGUSR1 this long before its time limit
   bool submit = false;         ///< false: print the scripts (dry run)
   bool allow_absolute = false; ///< an absolute outputs.cache may name the shot folder (without -o)
+  bool force = false;          ///< submit even though a cache the jobs write is already complete
   std::vector<std::string> wedges;  ///< "KEY=V1,V2" each (wedge.h): bake every combination instead
 };
 
@@ -36,6 +37,9 @@ struct FarmJob {
 /// The jobs of one shot, in submission order (bake first), and its folders (absolute).
 struct FarmPlan {
   std::string out_dir, cache, farm_dir;
+  /// Every cache the jobs write (the shot's, or each wedge case's): --submit refuses to replace
+  /// a complete one without --force.
+  std::vector<std::string> caches;
   std::vector<FarmJob> jobs;
   /// Files written before submission besides the scripts (wedges: each combination's scene,
   /// and wedges.json): path -> content.

@@ -49,13 +49,14 @@ std::string header(const std::string& job, const std::string& log, const FarmReq
   return h;
 }
 
-// The lines that run one bake in a job: resume when a partial cache is there, hand Slurm's
-// signals to magbake, and requeue the job when magbake stopped at a frame (exit 75). The
-// arguments are shell words (quoted or "$var" expressions).
+// The lines that run one bake in a job: resume when a partial cache is there, else bake afresh
+// (--force: a complete cache left by an earlier run is replaced; `magbake farm --submit` asked
+// before submitting), hand Slurm's signals to magbake, and requeue the job when magbake stopped
+// at a frame (exit 75). The arguments are shell words (quoted or "$var" expressions).
 std::string bake_body(const std::string& exe, const std::string& threads, const std::string& scene,
                       const std::string& out, const std::string& partial, const std::string& extra) {
   return fmt::format(
-      "resume=\n"
+      "resume=--force\n"
       "if [ -e {} ]; then resume=--resume; fi\n"
       "echo \"magbake farm: bake on $(hostname), run ${{SLURM_RESTART_COUNT:-0}} of job ${{SLURM_JOB_ID:-none}}\"\n"
       "{} {} bake {} -o {} {} $resume &\n"
@@ -84,6 +85,7 @@ FarmPlan plan_farm(const scene::Scene& s, const FarmRequest& r) {
                            .lexically_normal();
   p.out_dir = out.string();
   p.cache = (out / given.filename()).string();
+  p.caches = {p.cache};
   p.farm_dir = (out / "farm").string();
   const fs::path logs = out / "farm" / "logs";
   const std::string exe = r.magbake.empty() ? self_exe() : r.magbake;
@@ -106,8 +108,8 @@ FarmPlan plan_farm(const scene::Scene& s, const FarmRequest& r) {
   p.jobs.push_back(bake);
 
   // Exports: chunks of frames, each task its own range from SLURM_ARRAY_TASK_ID. Field chunks
-  // are whole multiples of outputs.field.every, so every chunk writes the frames a full run
-  // writes (every is counted from the start of the range given to `magbake field`).
+  // are whole multiples of outputs.field.every, so no task is left with no frame to write
+  // (`magbake field` counts every from the shot's first frame, whatever the range).
   auto add_export = [&](const std::string& stage, const std::string& pattern, int every) {
     const int chunk = (r.chunk + every - 1) / every * every;
     const int tasks = (last - first) / chunk + 1;
@@ -155,6 +157,7 @@ FarmPlan plan_wedges(const scene::Scene& s, const FarmRequest& r, const std::vec
     for (const auto& [k, v] : c.settings) settings[k] = v;
     record.push_back({{"index", i}, {"folder", c.folder}, {"settings", settings},
                       {"cache", (fs::path(c.folder) / cache_name).string()}});
+    p.caches.push_back((fs::path(c.folder) / cache_name).string());
     dirs += "\n  " + quote(c.folder);
   }
   dirs += "\n)\n";
@@ -281,6 +284,18 @@ int cmd_farm(const FarmRequest& r, const Global& g) {
     return kOk;
   }
 
+  if (!r.force) {
+    std::vector<std::string> complete;
+    for (const std::string& c : plan.caches) {
+      if (fs::exists(c)) complete.push_back(c);
+    }
+    if (!complete.empty()) {
+      spdlog::error("{} complete cache(s) would be replaced, e.g. {}: --force submits anyway (the jobs bake afresh), "
+                    "or choose another shot folder with -o",
+                    complete.size(), complete.front());
+      return kUsage;
+    }
+  }
   const std::string sbatch = find_in_path("sbatch");
   if (sbatch.empty()) {
     spdlog::error("sbatch is not in PATH: submit from a Slurm login node (or install slurm-client); "

@@ -113,11 +113,19 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
   const auto coms = cache->centers_of_mass();
   magnetics::State st;
   st.resize(model);
-  Progress progress("field", "field", (b - a) / every + 1, g.quiet);
+  // Every `every`-th frame counted from the shot's first frame (the scene's), whatever the range:
+  // chunks of a farm job and a full run write the same frames.
+  const int shot_first = cache->first_frame();
+  auto wanted = [&](int frame) { return frame >= a && frame <= b && (frame - shot_first) % every == 0; };
+  int total = 0, last_wanted = a;
+  for (int f = a; f <= b; ++f) {
+    if (wanted(f)) ++total, last_wanted = f;
+  }
+  Progress progress("field", "field", std::max(total, 1), g.quiet);
   int done = 0;
   for (int i = 0; i < cache->frame_count(); ++i) {
     const io::CacheFrame fr = cache->frame(i);
-    if (fr.frame < a || fr.frame > b || (fr.frame - a) % every != 0) continue;
+    if (!wanted(fr.frame)) continue;
     if (interrupt_requested()) {
       progress.finish();
       spdlog::warn("interrupted after {} volumes", done);
@@ -151,7 +159,7 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
       return kFailure;
     }
     ++done;
-    progress.update(done, fr.frame, a + (b - a) / every * every);
+    progress.update(done, fr.frame, last_wanted);
   }
   progress.finish();
   spdlog::info("wrote {} field volumes ({})", done, pattern);

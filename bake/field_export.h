@@ -19,7 +19,7 @@ struct FieldRequest {
   std::optional<double> voxel;                ///< m
   std::optional<magnetics::Box3> bounds;      ///< world, m
   std::optional<double> margin;               ///< m (auto bounds)
-  std::optional<int> every;
+  std::optional<int> every;                   ///< every n-th frame from the shot's first (default outputs.field.every)
   double threshold = 1e-5;                    ///< T: fainter voxels stay inactive
   double theta = 0.15;                        ///< tree opening angle (error bound, docs/field-volumes.md)
   double max_voxels = 6e7;                    ///< capacity guard

@@ -96,6 +96,8 @@ int run(int argc, char** argv) {
   bake->add_flag("--allow-absolute-outputs", allow_absolute,
                  "let the scene's absolute output paths be used (by default a scene writes inside the output folder)");
 
+  bool force = false;
+  bake->add_flag("--force", force, "replace a complete cache of the same name (without it, bake refuses to)");
   bool cache_only = false;
   bake->add_flag("--cache-only", cache_only,
                  "write the cache only, not the field volumes and previews of outputs (farm: export jobs do those)");
@@ -112,6 +114,8 @@ int run(int argc, char** argv) {
   farm->add_option("--magbake", farm_req.magbake, "magbake program the jobs run (default: this one)");
   farm->add_option("--wedge", farm_req.wedges,
                    "KEY=V1,V2: bake every combination of the wedged scene settings (repeatable; docs/farm.md)");
+  farm->add_flag("--force", farm_req.force,
+                 "submit even if the shot's cache (or a wedge case's) is complete: the jobs bake it again");
   farm->add_flag("--allow-absolute-outputs", farm_req.allow_absolute,
                  "without -o, let an absolute outputs.cache of the scene name the shot folder");
   std::string wedge_file;
@@ -140,6 +144,9 @@ int run(int argc, char** argv) {
   field->add_option("--voxel", field_voxel, "voxel edge in metres (default: outputs.field.voxel, else region/128)");
   field->add_option("--bounds", field_bounds, "region xmin,ymin,zmin,xmax,ymax,zmax in metres (default: auto)");
   field->add_option("--margin", field_margin, "margin around the magnetic bodies for auto bounds, metres");
+  field->add_option("--every", field_req.every,
+                    "every n-th frame, counted from the shot's first frame (default: outputs.field.every, else 1)")
+      ->check(CLI::Range(1, 1000000));
   field->add_option("--threshold", field_req.threshold, "voxels with |B| below this (tesla) stay inactive")->capture_default_str();
   field->add_option("--theta", field_req.theta, "tree opening angle (accuracy, see docs)")->capture_default_str();
   field->add_flag("--allow-absolute-outputs", field_req.allow_absolute, "let an absolute outputs.field.path stored in the cache be used");
@@ -151,6 +158,8 @@ int run(int argc, char** argv) {
   preview->add_option("cache", preview_cache, "cache (.h5)")->required();
   preview->add_option("--frames", preview_frames, "frame range A-B (default: every frame)");
   preview->add_option("-o,--output", preview_req.pattern, "file pattern, e.g. out/preview.####.png");
+  preview->add_option("--every", preview_req.every, "every n-th frame, counted from the shot's first frame (default 1)")
+      ->check(CLI::Range(1, 1000000));
   preview->add_option("--size", preview_size, "image size WxH (default: outputs.preview.size or 960x540)");
   preview->add_flag("--field-lines", lines_on, "draw field lines (streamlines of B)");
   preview->add_flag("--no-field-lines", lines_off, "no field lines");
@@ -279,7 +288,7 @@ int run(int argc, char** argv) {
     cli::install_interrupt_handlers();
     return cache_reader_command(preview_cache, [&] { return cli::export_preview(preview_cache, preview_req, g); });
   }
-  if (*bake) return cli::cmd_bake(scene_path, out_dir, frames, resume, g, strict, allow_absolute, {}, cache_only);
+  if (*bake) return cli::cmd_bake(scene_path, out_dir, frames, resume, g, strict, allow_absolute, {}, cache_only, force);
   if (*farm) {
     if (farm_req.chunk < 1 || farm_req.chunk > 1000000) {
       spdlog::error("--chunk must be from 1 to 1000000, got {}", farm_req.chunk);

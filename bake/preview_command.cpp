@@ -252,6 +252,9 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
     pattern = (fs::path(cache_path).parent_path() / (fs::path(cache_path).stem().string() + ".preview.####.png")).string();
   }
   if (const int rc = prepare_output_folder(pattern, a, "previews"); rc != kOk) return rc;
+  // Every `every`-th frame counted from the shot's first frame, whatever the range (as field).
+  const int every = std::max(1, req.every.value_or(1)), shot_first = cache->first_frame();
+  auto wanted = [&](int frame) { return frame >= a && frame <= b && (frame - shot_first) % every == 0; };
 
   // Geometry and a steady camera: every body's extent over the whole shot.
   const ShotGeometry geo = load_geometry(*cache);
@@ -326,7 +329,7 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
   // Contact sheet: frames tiled in rows, box-filtered down so the sheet is at most 1920 pixels
   // wide; each frame is added as it is drawn (memory: one sheet, not every frame).
   int n_sheet = 0;
-  for (const io::CacheFrame& fr : frames) n_sheet += fr.frame >= a && fr.frame <= b;
+  for (const io::CacheFrame& fr : frames) n_sheet += wanted(fr.frame);
   const int cols = static_cast<int>(std::ceil(std::sqrt(double(n_sheet))));
   const int rows = (n_sheet + cols - 1) / cols;
   const int step = std::max(1, (cols * width + 1919) / 1920);
@@ -349,10 +352,14 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
       }
     }
   };
-  Progress progress("preview", "preview", b - a + 1, g.quiet);
+  int total = 0, last_wanted = a;
+  for (int f = a; f <= b; ++f) {
+    if (wanted(f)) ++total, last_wanted = f;
+  }
+  Progress progress("preview", "preview", std::max(total, 1), g.quiet);
   int done = 0;
   for (const io::CacheFrame& fr : frames) {
-    if (fr.frame < a || fr.frame > b) continue;
+    if (!wanted(fr.frame)) continue;
     if (interrupt_requested()) {
       progress.finish();
       spdlog::warn("interrupted after {} previews", done);
@@ -390,7 +397,7 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
     spdlog::debug("preview frame {} ms: lines {:.2f} draw {:.2f} png {:.2f} total {:.2f} ({} lines)", fr.frame, ms(t1 - t0),
                   ms(t2 - t1), ms(t3 - t2), ms(Clock::now() - t0), lines.size());
     ++done;
-    progress.update(done, fr.frame, b);
+    progress.update(done, fr.frame, last_wanted);
   }
   progress.finish();
   if (!sheet.empty()) {

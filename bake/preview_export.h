@@ -17,6 +17,7 @@ struct PreviewRequest {
   std::optional<bool> field_lines;  ///< unset = outputs.preview.field_lines
   bool auto_camera = false;         ///< ignore the scene's camera and frame the shot
   std::string contact_sheet;        ///< also write every rendered frame tiled into this PNG
+  std::optional<int> every;         ///< every n-th frame, counted from the shot's first frame (default 1)
   bool allow_absolute = false;      ///< an absolute outputs.preview.path may be used
 };
 

@@ -15,17 +15,53 @@ DiffReport diff_caches(const CacheReader& a, const CacheReader& b, const DiffOpt
     return r;
   }
   if (a.scene_hash() != b.scene_hash()) r.notes.push_back("baked from different scene files (hashes differ)");
-  const int frames = std::min(a.frame_count(), b.frame_count());
-  if (a.frame_count() != b.frame_count()) {
-    r.same = false;
-    r.notes.push_back("frame counts differ: " + std::to_string(a.frame_count()) + " vs " + std::to_string(b.frame_count()) +
-                      " (comparing the first " + std::to_string(frames) + ")");
+  // Frames are lined up by frame number: a bake of frames 10-20 is compared with frames 10-20 of
+  // a full bake, and frames that only one cache holds are reported.
+  auto steps = [](const CacheReader& c) {
+    std::vector<int> out;
+    if (c.frame_count() == 0) return out;
+    for (double v : h5::read_rows(c.file(), "frames/step", 0, c.frame_count())) out.push_back(static_cast<int>(v));
+    return out;
+  };
+  const std::vector<int> sa = steps(a), sb = steps(b);
+  std::vector<std::size_t> ia, ib;  // matched rows
+  std::vector<int> only_a, only_b;
+  for (std::size_t i = 0, j = 0; i < sa.size() || j < sb.size();) {
+    if (j == sb.size() || (i < sa.size() && sa[i] < sb[j])) {
+      only_a.push_back(sa[i++]);
+    } else if (i == sa.size() || sb[j] < sa[i]) {
+      only_b.push_back(sb[j++]);
+    } else {
+      ia.push_back(i++), ib.push_back(j++);
+    }
   }
-  if (a.first_frame() != b.first_frame()) {
+  // "frames 1-9, 21" from sorted frame numbers.
+  auto ranges = [](const std::vector<int>& f) {
+    std::string out;
+    for (std::size_t k = 0; k < f.size();) {
+      std::size_t e = k;
+      while (e + 1 < f.size() && f[e + 1] == f[e] + 1) ++e;
+      if (!out.empty()) out.append(", ");
+      out.append(std::to_string(f[k]));
+      if (e > k) out.append("-").append(std::to_string(f[e]));
+      k = e + 1;
+    }
+    return out;
+  };
+  if (!only_a.empty()) {
     r.same = false;
-    r.notes.push_back("first frames differ");
+    r.notes.push_back("frames only in " + a.path() + ": " + ranges(only_a));
   }
-  r.frames_compared = frames;
+  if (!only_b.empty()) {
+    r.same = false;
+    r.notes.push_back("frames only in " + b.path() + ": " + ranges(only_b));
+  }
+  const std::size_t frames = ia.size();
+  if (frames == 0 && (a.frame_count() > 0 || b.frame_count() > 0)) {
+    r.same = false;
+    r.notes.push_back("the caches have no frame in common");
+  }
+  r.frames_compared = static_cast<int>(frames);
   if (frames == 0) return r;
   const auto& names = a.body_names();
   const std::size_t n = names.size();
@@ -40,19 +76,19 @@ DiffReport diff_caches(const CacheReader& a, const CacheReader& b, const DiffOpt
       r.notes.push_back(path + " is in only one cache");
       return;
     }
-    const std::vector<double> va = h5::read_rows(a.file(), path, 0, frames);
-    const std::vector<double> vb = h5::read_rows(b.file(), path, 0, frames);
-    if (va.size() != vb.size() || va.size() != frames * groups * comp) {
+    const std::vector<double> va = h5::read_rows(a.file(), path, 0, a.frame_count());
+    const std::vector<double> vb = h5::read_rows(b.file(), path, 0, b.frame_count());
+    if (va.size() != a.frame_count() * groups * comp || vb.size() != b.frame_count() * groups * comp) {
       r.same = false;
       r.notes.push_back(path + " has different shapes");
       return;
     }
     std::map<std::size_t, Deviation> dev;  // by group
     bool nonfinite_noted = false;
-    for (int f = 0; f < frames; ++f) {
+    for (std::size_t f = 0; f < frames; ++f) {
       for (std::size_t g = 0; g < groups; ++g) {
-        const double* x = va.data() + (f * groups + g) * comp;
-        const double* y = vb.data() + (f * groups + g) * comp;
+        const double* x = va.data() + (ia[f] * groups + g) * comp;
+        const double* y = vb.data() + (ib[f] * groups + g) * comp;
         double err = 0;
         bool bad = false;
         bool finite = true;
@@ -62,7 +98,7 @@ DiffReport diff_caches(const CacheReader& a, const CacheReader& b, const DiffOpt
           bad = true;
           err = std::numeric_limits<double>::infinity();
           if (!nonfinite_noted) {
-            r.notes.push_back(path + " holds non-finite values (NaN or Inf) at frame " + std::to_string(a.first_frame() + f));
+            r.notes.push_back(path + " holds non-finite values (NaN or Inf) at frame " + std::to_string(sa[ia[f]]));
             nonfinite_noted = true;
           }
         } else if (o.exact) {
@@ -87,9 +123,9 @@ DiffReport diff_caches(const CacheReader& a, const CacheReader& b, const DiffOpt
         if (fresh) {
           d.quantity = quantity;
           d.body = per_body ? names[g] : (groups > 1 ? "cell " + std::to_string(g) : "");
-          d.first_frame = a.first_frame() + f;
+          d.first_frame = sa[ia[f]];
         }
-        if (err >= d.largest) d.largest = err, d.largest_frame = a.first_frame() + f;
+        if (err >= d.largest) d.largest = err, d.largest_frame = sa[ia[f]];
       }
     }
     for (auto& [g, d] : dev) {

@@ -31,11 +31,12 @@ struct DiffReport {
   bool same = true;
   std::vector<std::string> notes;      ///< structural differences (frame counts, names, scenes)
   std::vector<Deviation> deviations;   ///< one per (quantity, body) that differs
-  int frames_compared = 0;
+  int frames_compared = 0;             ///< frames both caches hold (lined up by frame number)
 };
 
 /// Compares everything that matters (body series, induced moments, observables except wall
-/// times). Throws std::runtime_error if a file cannot be read.
+/// times) over the frames both caches hold, lined up by frame number; frames that only one
+/// holds make them differ and are named in a note ("frames only in PATH: 1-9, 21-25"). Throws std::runtime_error if a file cannot be read.
 DiffReport diff_caches(const CacheReader& a, const CacheReader& b, const DiffOptions& options);
 
 }  // namespace magbake::io

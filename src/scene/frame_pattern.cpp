@@ -1,7 +1,6 @@
 #include "frame_pattern.h"
 
 #include <cassert>
-#include <filesystem>
 
 namespace magbake::scene {
 namespace {
@@ -58,6 +57,9 @@ std::string scan(const std::string& p, Field& f) {
     }
   }
   if (fields > 1) return "the file pattern names the frame " + std::to_string(fields) + " times; use one #### or %04d";
+  // Without a frame field every frame would need a name made up for it (field.vdb -> field.7.vdb
+  // until 2026-12-06): a renderer's sequence loader finds no sequence there.
+  if (fields == 0) return "the file pattern names no frame: put #### (or %04d) where the frame number goes, e.g. field.####.vdb";
   return "";
 }
 
@@ -95,11 +97,8 @@ std::string expand_frame_pattern(const std::string& pattern, int frame) {
   Field f;
   [[maybe_unused]] const std::string e = scan(pattern, f);
   assert(e.empty());
-  if (f.begin != std::string::npos) {
-    return literal(pattern.substr(0, f.begin)) + padded(frame, f.width) + literal(pattern.substr(f.end));
-  }
-  const std::filesystem::path p(literal(pattern));
-  return (p.parent_path() / (p.stem().string() + "." + std::to_string(frame) + p.extension().string())).string();
+  assert(f.begin != std::string::npos);
+  return literal(pattern.substr(0, f.begin)) + padded(frame, f.width) + literal(pattern.substr(f.end));
 }
 
 }  // namespace magbake::scene

@@ -57,6 +57,72 @@ TEST_F(Bake, SameThreadCountOrNotTheCacheIsIdentical) {
   EXPECT_EQ(sh(exe() + " diff --exact " + b + " " + c).code, 0);
 }
 
+// diff lines frames up by frame number (issue 16): a bake of frames 10-20 (simulated from the
+// first frame, written from the tenth) is frames 10-20 of the full bake bit for bit, and the
+// frames that only the full bake holds are named.
+TEST_F(Bake, DiffLinesFramesUpByNumberAndNamesTheOnesInOneCacheOnly) {
+  const std::string scene = src("tests/golden/sphere_pickup.yaml");
+  ASSERT_EQ(bake(scene, "full", "--threads 1 --quiet").code, 0);
+  ASSERT_EQ(sh(exe() + " --threads 1 --quiet bake " + scene + " --frames 10-20 -o " + (dir / "part").string()).code, 0);
+  const std::string full = (dir / "full/sphere_pickup.h5").string(), part = (dir / "part/sphere_pickup.h5").string();
+  const Outcome d = sh(exe() + " diff --exact " + full + " " + part);
+  EXPECT_EQ(d.code, 1) << d.out;  // frames in one cache only: they differ
+  EXPECT_NE(d.out.find("frames only in " + full + ": 1-9, 21-25"), std::string::npos) << d.out;
+  EXPECT_EQ(d.out.find("position"), std::string::npos) << "the common frames 10-20 should be identical:\n" << d.out;
+  const Outcome swapped = sh(exe() + " diff " + part + " " + full);
+  EXPECT_EQ(swapped.code, 1);
+  EXPECT_NE(swapped.out.find("frames only in " + full + ": 1-9, 21-25"), std::string::npos) << swapped.out;
+}
+
+// A complete cache is a finished bake: baking into its folder again exits 2 and leaves it as it
+// was; --force replaces it, --resume finds it complete and does nothing.
+TEST_F(Bake, ACompleteCacheIsReplacedOnlyWithForce) {
+  const std::string scene = src("tests/golden/sphere_pickup.yaml");
+  ASSERT_EQ(bake(scene, "f", "--quiet").code, 0);
+  const fs::path cache = dir / "f/sphere_pickup.h5";
+  const auto written = fs::last_write_time(cache);
+  const auto size = fs::file_size(cache);
+  const Outcome again = bake(scene, "f", "--quiet");
+  EXPECT_EQ(again.code, 2) << again.out;
+  EXPECT_NE(again.out.find("is already a complete bake: --force replaces it"), std::string::npos) << again.out;
+  EXPECT_EQ(fs::last_write_time(cache), written);
+  EXPECT_EQ(fs::file_size(cache), size);
+  EXPECT_FALSE(fs::exists(dir / "f/sphere_pickup.h5.partial"));
+  const Outcome resumed = sh(exe() + " bake " + scene + " -o " + (dir / "f").string() + " --resume");
+  EXPECT_EQ(resumed.code, 0) << resumed.out;
+  EXPECT_NE(resumed.out.find("nothing to resume"), std::string::npos) << resumed.out;
+  const Outcome forced = sh(exe() + " --quiet bake " + scene + " -o " + (dir / "f").string() + " --force");
+  EXPECT_EQ(forced.code, 0) << forced.out;
+  EXPECT_NE(fs::last_write_time(cache), written);
+  EXPECT_EQ(sh(exe() + " diff --exact " + cache.string() + " " + cache.string()).code, 0);
+}
+
+// --every on field and preview counts from the shot's first frame, whatever the range, so split
+// runs write the frames a whole run writes; a pattern that names no frame is refused (exit 2).
+TEST_F(Bake, EveryCountsFromTheShotsFirstFrameAndPatternsMustNameTheFrame) {
+  const std::string scene = src("tests/golden/sphere_pickup.yaml");
+  ASSERT_EQ(bake(scene, "e", "--quiet").code, 0);
+  const std::string cache = (dir / "e/sphere_pickup.h5").string();
+  const Outcome f = sh(exe() + " --quiet field " + cache + " --frames 5-20 --every 6 -o " + (dir / "v/f.####.vdb").string());
+  ASSERT_EQ(f.code, 0) << f.out;
+  std::vector<std::string> vdbs, pngs;
+  for (const auto& e : fs::directory_iterator(dir / "v")) vdbs.push_back(e.path().filename().string());
+  std::sort(vdbs.begin(), vdbs.end());
+  EXPECT_EQ(vdbs, (std::vector<std::string>{"f.0007.vdb", "f.0013.vdb", "f.0019.vdb"}));  // 1, 7, 13, 19, 25 in 5-20
+  const Outcome p = sh(exe() + " --quiet preview " + cache + " --every 10 --size 64x48 -o " + (dir / "p/p.####.png").string());
+  ASSERT_EQ(p.code, 0) << p.out;
+  for (const auto& e : fs::directory_iterator(dir / "p")) pngs.push_back(e.path().filename().string());
+  std::sort(pngs.begin(), pngs.end());
+  EXPECT_EQ(pngs, (std::vector<std::string>{"p.0001.png", "p.0011.png", "p.0021.png"}));
+  for (const std::string& cmd : {"field " + cache + " -o " + (dir / "w/f.vdb").string(),
+                                 "preview " + cache + " -o " + (dir / "w/p.png").string()}) {
+    const Outcome bad = sh(exe() + " " + cmd);
+    EXPECT_EQ(bad.code, 2) << cmd << "\n" << bad.out;
+    EXPECT_NE(bad.out.find("names no frame"), std::string::npos) << bad.out;
+  }
+  EXPECT_FALSE(fs::exists(dir / "w/f.vdb"));
+}
+
 TEST_F(Bake, GoldenCachesStillMatch) {
   for (const char* name : {"magnets_in_space", "sphere_pickup"}) {
     ASSERT_EQ(bake(src(std::string("tests/golden/") + name + ".yaml"), "g").code, 0);
@@ -179,7 +245,13 @@ TEST_F(Bake, InterruptedBakeResumesAndMatches) {
     ASSERT_GT(kept, 0);
     ASSERT_LT(kept, 25);
   }
-  ASSERT_EQ(sh(exe() + " --threads 1 bake " + scene + " -o " + (dir / "cut").string() + " --resume").code, 0);
+  const Outcome r = sh(exe() + " --threads 1 bake " + scene + " -o " + (dir / "cut").string() + " --resume");
+  ASSERT_EQ(r.code, 0) << r.out;
+  // The report counts the whole cache, and what was kept.
+  EXPECT_NE(r.out.find("(25 frames: " + std::to_string(kept) + " kept from the interrupted bake, " +
+                       std::to_string(25 - kept) + " baked now)"),
+            std::string::npos)
+      << r.out;
   EXPECT_FALSE(fs::exists(partial));
   const io::CacheReader full((dir / "full/sphere_pickup.h5").string()), resumed((dir / "cut/sphere_pickup.h5").string());
   ASSERT_EQ(resumed.frame_count(), 25);

@@ -367,5 +367,35 @@ TEST(FarmCommand, BadOptionsExitTwoAndAMissingSbatchExitsOneWithTheReason) {
   std::filesystem::remove_all(out);
 }
 
+// A shot whose cache is already complete is not baked again by accident: --submit exits 2 and
+// writes nothing; with --force it goes on (here to the missing sbatch), and the job's bake line
+// replaces the cache (--force) unless it resumes a partial one.
+TEST(FarmCommand, SubmitRefusesToReplaceACompleteCacheWithoutForce) {
+  const std::filesystem::path out =
+      std::filesystem::temp_directory_path() / ("magbake_farm_done_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(out);
+  std::ofstream(out / "demo.h5") << "a complete cache stands here";
+  auto run = [&](const std::string& extra) {
+    const std::string cmd = "env PATH=/nonexistent " + std::string(MAGBAKE_EXE) + " farm " + scene("demo.yaml") + " -o " +
+                            out.string() + " --submit " + extra + " 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    std::string text;
+    std::array<char, 4096> buf;
+    while (std::fgets(buf.data(), buf.size(), p)) text += buf.data();
+    const int st = pclose(p);
+    return std::make_pair(WIFEXITED(st) ? WEXITSTATUS(st) : -1, text);
+  };
+  const auto [code, text] = run("");
+  EXPECT_EQ(code, 2) << text;
+  EXPECT_NE(text.find("complete cache(s) would be replaced, e.g. " + (out / "demo.h5").string()), std::string::npos) << text;
+  EXPECT_FALSE(std::filesystem::exists(out / "farm")) << "nothing written";
+  const auto [forced, forced_text] = run("--force");
+  EXPECT_EQ(forced, 1) << forced_text;
+  EXPECT_NE(forced_text.find("sbatch is not in PATH"), std::string::npos) << forced_text;
+  const Outcome dry = magbake("farm " + scene("demo.yaml") + " -o " + out.string() + " --dry-run");
+  EXPECT_NE(dry.out.find("resume=--force\n"), std::string::npos) << dry.out;
+  std::filesystem::remove_all(out);
+}
+
 }  // namespace
 }  // namespace magbake::testing

@@ -15,18 +15,17 @@ TEST(FramePattern, ExpandsHashesAndZeroPaddedDecimalsLikePrintf) {
   EXPECT_EQ(expand_frame_pattern("f.%04d.png", 42), "f.0042.png");
   EXPECT_EQ(expand_frame_pattern("f.%d.png", 42), "f.42.png");
   EXPECT_EQ(expand_frame_pattern("100%%/f.%02d.png", 5), "100%/f.05.png");
-  EXPECT_EQ(expand_frame_pattern("out/field.vdb", 9), "out/field.9.vdb");
   EXPECT_EQ(expand_frame_pattern("f.############.vdb", 2147483647), "f.002147483647.vdb");
 }
 
 TEST(FramePattern, RefusesEveryOtherFormatAndOverlongFields) {
   for (const char* bad : {"%s.vdb", "%n", "%x.vdb", "%4d.vdb", "%-4d.vdb", "%ld.vdb", "%013d.vdb", "%00d.vdb", "%",
-                          "a%", "####.%04d.vdb", "##.##.vdb", "%d%d.vdb", ""}) {
+                          "a%", "####.%04d.vdb", "##.##.vdb", "%d%d.vdb", "", "f.vdb", "out/field", "100%%.png"}) {
     EXPECT_TRUE(frame_pattern_error(bad).has_value()) << bad;
   }
   EXPECT_TRUE(frame_pattern_error(std::string(13, '#')).has_value());
   EXPECT_TRUE(frame_pattern_error(std::string("a\0b", 3)).has_value());
-  for (const char* good : {"f.####.vdb", "f.%04d.vdb", "f.%d.vdb", "f.vdb", "100%%.####.png", "#"}) {
+  for (const char* good : {"f.####.vdb", "f.%04d.vdb", "f.%d.vdb", "100%%.####.png", "#"}) {
     EXPECT_FALSE(frame_pattern_error(good).has_value()) << good;
   }
 }
