@@ -12,8 +12,8 @@
 namespace magbake::cli {
 
 /// "name.####.ext" (a run of # = the frame zero-padded to that width) or "name.%04d.ext" with a
-/// frame number; a pattern without either gets ".<frame>" before its extension. The pattern must
-/// have passed prepare_output_folder (scene/frame_pattern.h: never a printf format).
+/// frame number. The pattern must have passed prepare_output_folder (scene/frame_pattern.h: never
+/// a printf format; one frame field, exactly).
 std::string expand_pattern(const std::string& pattern, int frame);
 
 /// Opens a cache and resolves `frames` (inclusive; unset = every frame) against the frames it

@@ -59,6 +59,16 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
              const Global& g, bool strict = false, bool allow_absolute = false, const BakeHooks& hooks = {},
              bool cache_only = false, bool force = false);
 int cmd_info_cache(const std::string& path, bool all_bodies = false);
+
+/// `export --usd` (docs/usd.md): the cache as a USD stage.
+struct UsdRequest {
+  std::string usd;                            ///< output file (.usda)
+  std::optional<std::pair<int, int>> frames;  ///< inclusive; unset = every frame of the cache
+  /// Field volume files to reference ("name.####.vdb"); "" = outputs.field.path's file name beside
+  /// the cache when those files exist; "none" = no volume.
+  std::string field_pattern;
+};
+int cmd_export_usd(const std::string& cache, const UsdRequest& request, const Global& g);
 int cmd_info(const std::string& path, const Global& g);
 int cmd_eval(const std::string& path, double time, bool json, const Global& g);
 int cmd_diff(const std::string& a, const std::string& b, const io::DiffOptions& options, const Global& g);

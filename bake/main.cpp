@@ -168,6 +168,16 @@ int run(int argc, char** argv) {
   preview->add_flag("--allow-absolute-outputs", preview_req.allow_absolute,
                     "let an absolute outputs.preview.path stored in the cache be used");
 
+  std::string export_cache, export_frames;
+  cli::UsdRequest usd_req;
+  auto* exp = app.add_subcommand("export", "a cache as a USD stage for DCCs and renderers (docs/usd.md)");
+  exp->add_option("cache", export_cache, "cache (.h5)")->required();
+  exp->add_option("--usd", usd_req.usd, "USD file to write (.usda)")->required();
+  exp->add_option("--frames", export_frames, "frame range A-B (default: every frame of the cache)");
+  exp->add_option("--field", usd_req.field_pattern,
+                  "field volumes to reference, e.g. out/field.####.vdb (default: outputs.field.path beside the cache if "
+                  "written; none: no volume)");
+
   auto* check = app.add_subcommand("check", "validate a scene and print a one-screen summary with its cost (exit 0/2)");
   check->add_option("scene", scene_path, "scene file (YAML)")->required();
   double trial_seconds = 2.0;
@@ -247,6 +257,10 @@ int run(int argc, char** argv) {
     out = std::make_pair(fa, fb);
     return true;
   };
+  if (*exp) {
+    if (!frames_option(export_frames, usd_req.frames)) return cli::kUsage;
+    return cli::cmd_export_usd(export_cache, usd_req, g);
+  }
   if (*field) {
     if (!frames_option(field_frames, field_req.frames)) return cli::kUsage;
     if (field_voxel > 0) field_req.voxel = field_voxel;

@@ -19,6 +19,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   # independent readers and plots used by tests and bench scripts (Debian's /usr/bin/python3)
   python3 python3-numpy python3-h5py python3-openvdb python3-matplotlib
+  # a venv under the build folder for PyPI's usd-core (tests/usd)
+  python3-venv
   # disk-full test (loop-mounted ext2 image)
   e2fsprogs util-linux
   # fuzzing (libFuzzer comes with Debian's clang) and the sanitizer build

@@ -553,6 +553,25 @@ std::vector<double> CacheReader::parameter_doubles(const std::string& name) cons
   return h5::read_attr_doubles(p.id(), name);
 }
 
+std::vector<CacheReader::BodyInfo> CacheReader::body_info() const {
+  const std::vector<double> mass = h5::read_doubles(file(), "bodies/mass");  // shape checked at open
+  std::vector<BodyInfo> out(names_.size());
+  for (std::size_t i = 0; i < out.size() && i < mass.size(); ++i) out[i].mass = mass[i];
+  for (const char* key : {"motion", "material"}) {
+    const std::string path = std::string("bodies/") + key;
+    if (!h5::exists(file(), path)) continue;
+    std::vector<std::string> v;
+    try {
+      v = h5::read_strings(file(), path);
+    } catch (const std::exception&) {
+      continue;
+    }
+    if (v.size() != out.size()) continue;
+    for (std::size_t i = 0; i < out.size(); ++i) (key[1] == 'o' ? out[i].motion : out[i].material) = v[i];
+  }
+  return out;
+}
+
 std::vector<Vec3> CacheReader::centers_of_mass() const {
   const std::vector<double> c = h5::read_doubles(file(), "bodies/center_of_mass");
   std::vector<Vec3> out;

@@ -98,6 +98,13 @@ class CacheReader {
   std::string attribute(const std::string& name) const;  ///< a /parameters string attribute
   std::vector<double> parameter_doubles(const std::string& name) const;  ///< a /parameters numeric attribute
   std::vector<Vec3> centers_of_mass() const;             ///< body frame
+  /// What the cache says of each body besides its name: motion (static, kinematic, dynamic),
+  /// material name ("" for none) and mass (kg). Strings missing or of the wrong count read "".
+  struct BodyInfo {
+    std::string motion, material;
+    double mass = 0;
+  };
+  std::vector<BodyInfo> body_info() const;
   RenderGeometry geometry() const;
   /// A scalar per-frame observable (e.g. "magnetics_seconds") over the completed frames; empty
   /// when the cache does not hold it.

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# magbake export --usd, opened by the reference implementation (PyPI's usd-core) in a venv under
+# the build folder (downloads cached there, so reruns do not download again): the golden
+# sphere-pickup shot (a steel ball lifted by a kinematic magnet), with field volumes of three
+# frames, exported and checked by check_usd.py against the cache. Skipped (exit 77, with the
+# reason) only when the venv cannot be made or usd-core cannot be installed (no network).
+#   usd_export_test.sh MAGBAKE SOURCE_DIR BUILD_DIR
+set -uo pipefail
+exe=$1 src=$2 build=$3
+venv="$build/venv-usd"
+export PIP_CACHE_DIR="$build/pip-cache"
+if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import pxr" 2>/dev/null; then
+  rm -rf "$venv"
+  # Debian's h5py and numpy come from the system site packages.
+  if ! /usr/bin/python3 -m venv --system-site-packages "$venv" >/dev/null 2>&1; then
+    echo "SKIP: cannot make a Python venv (python3-venv missing?)"; exit 77
+  fi
+  if ! "$venv/bin/pip" install --quiet "usd-core==26.11" 2>&1 | tail -3; then :; fi
+  if ! "$venv/bin/python" -c "import pxr" 2>/dev/null; then
+    echo "SKIP: usd-core 26.11 could not be installed from PyPI (no network?)"; exit 77
+  fi
+fi
+"$venv/bin/python" -c "import h5py" 2>/dev/null || { echo "FAIL: h5py missing (install-deps.sh installs python3-h5py)"; exit 1; }
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+set -e
+"$exe" --quiet bake "$src/tests/golden/sphere_pickup.yaml" -o "$work/shot"
+"$exe" --quiet field "$work/shot/sphere_pickup.h5" --frames 1-3 -o "$work/shot/vdb/field.####.vdb"
+"$exe" export "$work/shot/sphere_pickup.h5" --usd "$work/shot/usd/shot.usda" --field "$work/shot/vdb/field.####.vdb"
+# Refusals: a binary .usdc (not written here) and a field pattern without a frame field.
+set +e
+"$exe" --quiet export "$work/shot/sphere_pickup.h5" --usd "$work/x.usdc" >/dev/null 2>&1
+[ $? -eq 2 ] || { echo "FAIL: --usd x.usdc should exit 2"; exit 1; }
+"$exe" --quiet export "$work/shot/sphere_pickup.h5" --usd "$work/x.usda" --field "$work/f.vdb" >/dev/null 2>&1
+[ $? -eq 2 ] || { echo "FAIL: --field without #### should exit 2"; exit 1; }
+[ ! -e "$work/x.usda" ] || { echo "FAIL: a refused export wrote a file"; exit 1; }
+set -e
+"$venv/bin/python" "$src/tests/usd/check_usd.py" "$work/shot/usd/shot.usda" "$work/shot/sphere_pickup.h5" 3
+# A frame range: the stage's time codes follow it.
+"$exe" --quiet export "$work/shot/sphere_pickup.h5" --usd "$work/part.usda" --frames 5-9 --field none
+"$venv/bin/python" - "$work/part.usda" <<'PY'
+import sys
+from pxr import Usd
+s = Usd.Stage.Open(sys.argv[1])
+assert (s.GetStartTimeCode(), s.GetEndTimeCode()) == (5, 9), (s.GetStartTimeCode(), s.GetEndTimeCode())
+assert not s.GetPrimAtPath("/sphere_pickup/field").IsValid()
+print("frames 5-9: start/end time codes 5, 9; no volume")
+PY
+echo "PASS"
