@@ -62,6 +62,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
         check_scene_output_path(s.preview->path, allow_absolute, "outputs.preview.path") != kOk) {
       return kUsage;
     }
+    if (s.usd && check_scene_output_path(*s.usd, allow_absolute, "outputs.usd") != kOk) return kUsage;
   }
 
   int first = s.first_frame, last = s.last_frame;
@@ -277,6 +278,17 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
     req.allow_absolute = allow_absolute;
     if (!out_dir.empty()) req.pattern = (fs::path(out_dir) / fs::path(s.preview->path).filename()).string();
     const int rc = export_preview(cache.string(), req, g);
+    if (rc != kOk) return rc;
+  }
+  // The USD stage last: it references the field volumes just written (docs/usd.md).
+  if (s.usd && !cache_only) {
+    UsdRequest req;
+    req.usd = out_dir.empty() ? *s.usd : (fs::path(out_dir) / fs::path(*s.usd).filename()).string();
+    req.frames = std::make_pair(first, last);
+    req.field_pattern = !s.field ? "none"
+                        : out_dir.empty() ? s.field->path
+                                          : (fs::path(out_dir) / fs::path(s.field->path).filename()).string();
+    const int rc = cmd_export_usd(cache.string(), req, g);
     if (rc != kOk) return rc;
   }
   return strict && !warnings.empty() ? kFailure : kOk;

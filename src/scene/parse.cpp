@@ -369,8 +369,9 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
     }
   }
   if (const YAML::Node o = c["outputs"]; o.IsDefined()) {
-    if (r.mapping(o, "outputs", {"cache", "field", "preview"}, {}, loc_of(o))) {
+    if (r.mapping(o, "outputs", {"cache", "field", "preview", "usd"}, {}, loc_of(o))) {
       s.cache = r.text(o, "cache", "outputs");
+      s.usd = r.text(o, "usd", "outputs");
       if (const YAML::Node f = o["field"]; f.IsDefined()) {
         s.field_set = true;
         s.field_loc = loc_of(f);

@@ -145,6 +145,7 @@ struct Scene {
   std::vector<Material> materials;
   std::vector<Body> bodies;
   std::optional<std::string> cache;     ///< as written (relative to the working directory)
+  std::optional<std::string> usd;       ///< outputs.usd: a USD stage (.usda) the bake writes at its end (docs/usd.md)
   std::optional<FieldOutput> field;
   std::optional<PreviewOutput> preview;
 

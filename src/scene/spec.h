@@ -104,7 +104,7 @@ struct SceneSpec {
   std::vector<MaterialSpecS> materials;
   std::vector<BodySpecS> bodies;
   // outputs
-  Val<std::string> cache;
+  Val<std::string> cache, usd;
   bool field_set = false;
   Loc field_loc;
   Val<std::string> field_path, field_bounds_auto;

@@ -655,6 +655,15 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
     if (const auto e = output_path_error(s.cache.v, true)) d.add(s.cache.loc, "outputs.cache", *e);
     else sc.cache = s.cache.v;
   }
+  if (s.usd.set) {
+    if (const auto e = output_path_error(s.usd.v, true)) {
+      d.add(s.usd.loc, "outputs.usd", *e);
+    } else if (std::filesystem::path(s.usd.v).extension() != ".usda") {
+      d.add(s.usd.loc, "outputs.usd", "expected a .usda file (USD text; `usdcat` converts it to .usdc), got '" + s.usd.v + "'");
+    } else {
+      sc.usd = s.usd.v;
+    }
+  }
   read_outputs(s, c.L, c.A, d, sc.field, sc.preview);
   return sc;
 }

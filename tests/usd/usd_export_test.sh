@@ -46,4 +46,19 @@ assert (s.GetStartTimeCode(), s.GetEndTimeCode()) == (5, 9), (s.GetStartTimeCode
 assert not s.GetPrimAtPath("/sphere_pickup/field").IsValid()
 print("frames 5-9: start/end time codes 5, 9; no volume")
 PY
+# outputs.usd: the bake writes the stage itself, after its field volumes (every 2nd frame).
+sed -e 's/frames: \[1, 25\]/frames: [1, 4]/' "$src/tests/golden/sphere_pickup.yaml" > "$work/sp.yaml"
+printf 'outputs:\n  field: {path: vdb/f.####.vdb, voxel: 2, every: 2}\n  usd: usd/sp.usda\n' >> "$work/sp.yaml"
+"$exe" --quiet bake "$work/sp.yaml" -o "$work/b" > /dev/null
+"$venv/bin/python" - "$work/b/sp.usda" <<'PY'
+import sys
+from pxr import Usd, UsdVol
+s = Usd.Stage.Open(sys.argv[1])
+assert (s.GetStartTimeCode(), s.GetEndTimeCode()) == (1, 4)
+b = UsdVol.OpenVDBAsset(s.GetPrimAtPath("/sphere_pickup/field/B"))
+times = b.GetFilePathAttr().GetTimeSamples()
+assert times == [1.0, 3.0], times
+assert all(b.GetFilePathAttr().Get(t).resolvedPath for t in times)
+print("outputs.usd: written by the bake, Volume at frames 1 and 3")
+PY
 echo "PASS"
