@@ -170,10 +170,15 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
       o << "            }\n";
     }
     // Render meshes (as the previews draw them), body frame, one colour per triangle.
-    int part = 0;
+    // A body of one mesh names it after itself (Blender's import merges such an Xform and its
+    // mesh into one object of that name); a body with parts has <body>_geometry, _geometry_1, ...
+    int meshes_of_body = 0, part = 0;
+    for (const render::Mesh& mesh : geo.meshes) meshes_of_body += mesh.body == static_cast<int>(i) && !mesh.positions.empty();
     for (const render::Mesh& mesh : geo.meshes) {
       if (mesh.body != static_cast<int>(i) || mesh.positions.empty()) continue;
-      const std::string mesh_name = part == 0 ? "geometry" : "geometry_" + std::to_string(part);
+      const std::string mesh_name = meshes_of_body == 1 ? prim
+                                    : part == 0         ? fmt::format("{}_geometry", prim)
+                                                        : fmt::format("{}_geometry_{}", prim, part);
       ++part;
       const std::size_t nt = mesh.positions.size() / 3;
       render::Vec3f lo = mesh.positions[0], hi = mesh.positions[0];
