@@ -8,6 +8,9 @@
 # The real-Slurm farm tests (Farm.Slurm_*) are in $slow too: they bake, export and preview the
 # demo shot through the scheduler twice (the farm command's own code is covered by
 # FarmCommand.* in both builds).
+# Usd.BlenderImportsTheStageAndRendersIt is in $slow as well: it exercises the same instrumented
+# export as Usd.ExportOpensInUsdCoreAndMatchesTheCache and would install Blender (bpy, 1 GB) a
+# second time under the sanitizer build.
 # Bake.SameCacheOnEmulatedIntelAndAmdCpus never runs here: it runs the binary under qemu-user,
 # and an instrumented binary's shadow memory and run time there test qemu, not magbake (the
 # normal build runs it).
@@ -15,7 +18,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build-asan}
 all=${2:-}
-slow='^(Contact\.SnappedCubesStayTogetherAndGainNoEnergy|Bake\.KillNineLeavesAReadableCacheWithEveryCompletedFrame|Bake\.SameCacheOnEmulatedIntelAndAmdCpus|Farm\.Slurm_.*)$'
+slow='^(Contact\.SnappedCubesStayTogetherAndGainNoEnergy|Bake\.KillNineLeavesAReadableCacheWithEveryCompletedFrame|Bake\.SameCacheOnEmulatedIntelAndAmdCpus|Farm\.Slurm_.*|Usd\.BlenderImportsTheStageAndRendersIt)$'
 never='^Bake\.SameCacheOnEmulatedIntelAndAmdCpus$'
 if [ ! -f "$build/build.ninja" ]; then
   cmake -S . -B "$build" -G Ninja -DMAGBAKE_SANITIZE=ON -DMAGBAKE_BUILD_BENCH=OFF >/dev/null
