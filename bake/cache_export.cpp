@@ -1,6 +1,8 @@
 // Helpers shared by the cache readers; see cache_export.h.
 #include "cache_export.h"
 
+#include <algorithm>
+
 #include <spdlog/spdlog.h>
 
 #include <filesystem>
@@ -58,6 +60,19 @@ int check_scene_output_path(const std::string& path, bool allow_absolute, const 
     return kUsage;
   }
   return kOk;
+}
+
+int FrameSelection::count() const {
+  int n = 0;
+  for (int f = first; f <= last; ++f) n += wanted(f);
+  return std::max(n, 1);
+}
+
+int FrameSelection::last_wanted() const {
+  for (int f = last; f > first; --f) {
+    if (wanted(f)) return f;
+  }
+  return first;
 }
 
 int prepare_output_folder(const std::string& pattern, int frame, const char* what) {

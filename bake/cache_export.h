@@ -16,6 +16,16 @@ namespace magbake::cli {
 /// a printf format; one frame field, exactly).
 std::string expand_pattern(const std::string& pattern, int frame);
 
+/// The frames an export writes: those in [first, last] that are a whole number of `every` from
+/// the shot's first frame (`shot_first`, the scene's), whatever the range, so split and whole
+/// runs write the same frames.
+struct FrameSelection {
+  int first = 0, last = 0, every = 1, shot_first = 0;
+  bool wanted(int frame) const { return frame >= first && frame <= last && (frame - shot_first) % every == 0; }
+  int count() const;  ///< frames wanted, at least 1 (a progress total)
+  int last_wanted() const;  ///< the last wanted frame (first when none)
+};
+
 /// Opens a cache and resolves `frames` (inclusive; unset = every frame) against the frames it
 /// holds. Returns kOk, or kUsage after logging why: unreadable or foreign file, no complete
 /// frame, or a range that is reversed or outside the cache.

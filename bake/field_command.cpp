@@ -115,17 +115,13 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
   st.resize(model);
   // Every `every`-th frame counted from the shot's first frame (the scene's), whatever the range:
   // chunks of a farm job and a full run write the same frames.
-  const int shot_first = cache->first_frame();
-  auto wanted = [&](int frame) { return frame >= a && frame <= b && (frame - shot_first) % every == 0; };
-  int total = 0, last_wanted = a;
-  for (int f = a; f <= b; ++f) {
-    if (wanted(f)) ++total, last_wanted = f;
-  }
-  Progress progress("field", "field", std::max(total, 1), g.quiet);
+  const FrameSelection pick{a, b, every, cache->first_frame()};
+  const int last_wanted = pick.last_wanted();
+  Progress progress("field", "field", pick.count(), g.quiet);
   int done = 0;
   for (int i = 0; i < cache->frame_count(); ++i) {
     const io::CacheFrame fr = cache->frame(i);
-    if (!wanted(fr.frame)) continue;
+    if (!pick.wanted(fr.frame)) continue;
     if (interrupt_requested()) {
       progress.finish();
       spdlog::warn("interrupted after {} volumes", done);

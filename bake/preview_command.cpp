@@ -181,8 +181,7 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
   }
   if (const int rc = prepare_output_folder(pattern, a, "previews"); rc != kOk) return rc;
   // Every `every`-th frame counted from the shot's first frame, whatever the range (as field).
-  const int every = std::max(1, req.every.value_or(1)), shot_first = cache->first_frame();
-  auto wanted = [&](int frame) { return frame >= a && frame <= b && (frame - shot_first) % every == 0; };
+  const FrameSelection pick{a, b, std::max(1, req.every.value_or(1)), cache->first_frame()};
 
   // Geometry and a steady camera: every body's extent over the whole shot.
   const ShotGeometry geo = load_geometry(*cache);
@@ -257,7 +256,7 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
   // Contact sheet: frames tiled in rows, box-filtered down so the sheet is at most 1920 pixels
   // wide; each frame is added as it is drawn (memory: one sheet, not every frame).
   int n_sheet = 0;
-  for (const io::CacheFrame& fr : frames) n_sheet += wanted(fr.frame);
+  for (const io::CacheFrame& fr : frames) n_sheet += pick.wanted(fr.frame);
   const int cols = static_cast<int>(std::ceil(std::sqrt(double(n_sheet))));
   const int rows = (n_sheet + cols - 1) / cols;
   const int step = std::max(1, (cols * width + 1919) / 1920);
@@ -280,14 +279,11 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
       }
     }
   };
-  int total = 0, last_wanted = a;
-  for (int f = a; f <= b; ++f) {
-    if (wanted(f)) ++total, last_wanted = f;
-  }
-  Progress progress("preview", "preview", std::max(total, 1), g.quiet);
+  const int last_wanted = pick.last_wanted();
+  Progress progress("preview", "preview", pick.count(), g.quiet);
   int done = 0;
   for (const io::CacheFrame& fr : frames) {
-    if (!wanted(fr.frame)) continue;
+    if (!pick.wanted(fr.frame)) continue;
     if (interrupt_requested()) {
       progress.finish();
       spdlog::warn("interrupted after {} previews", done);
