@@ -1,6 +1,7 @@
 // magbake field: B-field volumes (OpenVDB) from a cache, frame by frame.
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -20,20 +21,56 @@ using magnetics::Vec3;
 
 namespace {
 
-// Axis-aligned bounds of the magnetic bodies over every frame of the cache (world, m).
-magnetics::Box3 magnetic_bounds(const io::CacheReader& cache, const magnetics::Model& model) {
-  const io::RenderGeometry geo = cache.geometry();
+// What auto bounds need from every frame of the cache: the axis-aligned box of the magnetic
+// bodies (world, m), and the margin at which the strongest body's field has fallen to the
+// threshold (m; 0 when no body's field reaches beyond its bounding sphere).
+struct MagneticExtent {
   magnetics::Box3 box;
+  double reach = 0;
+};
+
+// Each magnetic body's net moment (its permanent cells turned with it plus its stored induced
+// moments) at each frame gives the distance d from the centre of its mesh at which its dipole
+// field on the axis, 2 (mu0 / 4 pi) |m| / d³, equals `threshold`; the reach is the largest
+// d - r over bodies and frames, r the mesh's radius about that centre.
+MagneticExtent magnetic_extent(const io::CacheReader& cache, const magnetics::Model& model,
+                               const std::vector<int>& induced_order, double threshold) {
+  const io::RenderGeometry geo = cache.geometry();
+  const int nb = model.body_count;
+  // Per body: centre and radius of its meshes (body frame), permanent moment (body frame).
+  std::vector<magnetics::Box3> local(nb);
+  for (const io::RenderGeometry::Submesh& s : geo.submeshes) {
+    for (std::int64_t v = s.vertex_begin; v < s.vertex_begin + s.vertex_count; ++v) local[s.body].extend(geo.vertices[v]);
+  }
+  std::vector<double> radius(nb, 0.0);
+  for (const io::RenderGeometry::Submesh& s : geo.submeshes) {
+    for (std::int64_t v = s.vertex_begin; v < s.vertex_begin + s.vertex_count; ++v) {
+      radius[s.body] = std::max(radius[s.body], (geo.vertices[v] - local[s.body].center()).norm());
+    }
+  }
+  std::vector<Vec3> permanent(nb, Vec3::Zero());
+  for (int c = 0; c < model.cell_count(); ++c) permanent[model.cell_body[c]] += model.cell_moment[c];
+  MagneticExtent out;
+  std::vector<Vec3> net(nb);
   for (int i = 0; i < cache.frame_count(); ++i) {
     const io::CacheFrame fr = cache.frame(i);
+    for (int b = 0; b < nb; ++b) net[b] = fr.orientation[b] * permanent[b];
+    for (std::size_t k = 0; k < model.induced_cells.size(); ++k) {
+      net[model.cell_body[model.induced_cells[k]]] += fr.induced_moment.at(induced_order[k]);
+    }
     for (const io::RenderGeometry::Submesh& s : geo.submeshes) {
       if (model.body_root[s.body] < 0) continue;  // not magnetic
       for (std::int64_t v = s.vertex_begin; v < s.vertex_begin + s.vertex_count; ++v) {
-        box.extend(fr.position[s.body] + fr.orientation[s.body] * geo.vertices[v]);
+        out.box.extend(fr.position[s.body] + fr.orientation[s.body] * geo.vertices[v]);
       }
     }
+    for (int b = 0; b < nb; ++b) {
+      if (model.body_root[b] < 0 || local[b].isEmpty()) continue;
+      const double d = std::cbrt(2.0 * magnetics::kMu0Over4Pi * net[b].norm() / threshold);
+      out.reach = std::max(out.reach, d - radius[b]);
+    }
   }
-  return box;
+  return out;
 }
 
 }  // namespace
@@ -64,6 +101,19 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
     return kOk;
   }
 
+  // Threshold and display density, relative to the strongest field the shot's sources make:
+  // the largest remanence of its magnets (the field at a long magnet's pole face), or the
+  // applied field's strength if that is larger (soft bodies in a coil).
+  double max_magnetization = 0;
+  for (const Vec3& M : model.part_magnetization) max_magnetization = std::max(max_magnetization, M.norm());
+  const std::vector<double> ext = cache->parameter_doubles("external_field");
+  const Vec3 applied(ext.at(0), ext.at(1), ext.at(2));
+  double reference = std::max(magnetics::kMu0 * max_magnetization, applied.norm());
+  if (!(reference > 0)) reference = 1.0;  // no source: no field anywhere, nothing active
+  double threshold = io::kAutoThresholdFraction * reference;
+  if (req.threshold) threshold = *req.threshold;
+  else if (!req.threshold_auto && field && defaults.threshold) threshold = *defaults.threshold;
+
   // Region and voxel size (fixed for the whole cache, so split frame ranges line up).
   magnetics::Box3 region;
   if (req.bounds) {
@@ -71,8 +121,15 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
   } else if (field && !defaults.auto_bounds) {
     region = magnetics::Box3(defaults.bounds_min, defaults.bounds_max);
   } else {
-    region = magnetic_bounds(*cache, model);
-    const double margin = req.margin.value_or(defaults.margin);
+    // Auto: the magnetic bodies over the whole shot, plus the margin; an auto margin reaches
+    // where the strongest body's field falls to the threshold, at least a quarter of the
+    // bodies' box and at most four times it.
+    const MagneticExtent extent = magnetic_extent(*cache, model, induced_order, threshold > 0 ? threshold : io::kAutoThresholdFraction * reference);
+    region = extent.box;
+    const double size = region.isEmpty() ? 0.0 : region.sizes().maxCoeff();
+    double margin = std::clamp(extent.reach, 0.25 * size, 4.0 * size);
+    if (req.margin) margin = *req.margin;
+    else if (!req.margin_auto && field && defaults.margin) margin = *defaults.margin;
     region.min() -= Vec3::Constant(margin);
     region.max() += Vec3::Constant(margin);
   }
@@ -97,9 +154,6 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
     return kUsage;
   }
   const Eigen::Vector3i dims = counts.cast<int>();
-  const double threshold = req.threshold;
-  const std::vector<double> ext = cache->parameter_doubles("external_field");
-  const Vec3 applied(ext.at(0), ext.at(1), ext.at(2));
   magnetics::FieldOptions opt;
   opt.theta = req.theta;
   opt.near_field = cache->parameter_doubles("near_field").at(0);
@@ -108,8 +162,9 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
   opt.surfaces = true;  // the same field as probe and previews (physics.md §12)
 
   spdlog::info("field volumes: {} x {} x {} voxels of {:.4g} mm over [{:.4g} {:.4g} {:.4g}]-[{:.4g} {:.4g} {:.4g}] m, "
-               "frames {}-{} every {}",
-               dims[0], dims[1], dims[2], voxel * 1e3, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], a, b, every);
+               "frames {}-{} every {}; active where the bodies' |B| >= {:.3g} T, density 1 at {:.3g} T",
+               dims[0], dims[1], dims[2], voxel * 1e3, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], a, b, every, threshold,
+               reference);
   const auto coms = cache->centers_of_mass();
   magnetics::State st;
   st.resize(model);
@@ -119,6 +174,7 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
   const int last_wanted = pick.last_wanted();
   Progress progress("field", "field", pick.count(), g.quiet);
   int done = 0;
+  std::size_t active_total = 0, voxels_total = 0;
   for (int i = 0; i < cache->frame_count(); ++i) {
     const io::CacheFrame fr = cache->frame(i);
     if (!pick.wanted(fr.frame)) continue;
@@ -138,17 +194,21 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
     samples.origin = lo;
     samples.voxel = voxel;
     samples.dims = dims;
-    evaluate_field_grid(model, st, opt, applied, threshold, samples);
+    samples.applied = applied;
+    evaluate_field_grid(model, st, opt, threshold, samples);
     io::VolumeInfo info;
     info.frame = fr.frame;
     info.time = fr.time;
     info.scene_hash = cache->scene_hash();
     info.scene_name = cache->attribute("scene_name");
     info.threshold = threshold;
+    info.reference = reference;
     const std::string path = expand_pattern(pattern, fr.frame);
     try {
       const std::size_t active = io::write_field_volume(path, samples, info);
       spdlog::debug("{}: {} active voxels", path, active);
+      active_total += active;
+      voxels_total += std::size_t(dims.prod());
     } catch (const std::exception& e) {
       progress.finish();
       spdlog::error("{}", e.what());
@@ -158,7 +218,8 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
     progress.update(done, fr.frame, last_wanted);
   }
   progress.finish();
-  spdlog::info("wrote {} field volumes ({})", done, pattern);
+  spdlog::info("wrote {} field volumes ({}), {:.3g}% of their voxels active", done, pattern,
+               voxels_total ? 100.0 * double(active_total) / double(voxels_total) : 0.0);
   return kOk;
 }
 

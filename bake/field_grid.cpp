@@ -6,7 +6,7 @@
 namespace magbake::cli {
 
 void evaluate_field_grid(const magnetics::Model& m, const magnetics::State& s, const magnetics::FieldOptions& opt,
-                         const magnetics::Vec3& applied, double threshold, io::FieldSamples& out) {
+                         double threshold, io::FieldSamples& out) {
   using magnetics::Vec3;
   const std::size_t n = std::size_t(out.dims[0]) * out.dims[1] * out.dims[2];
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -24,9 +24,7 @@ void evaluate_field_grid(const magnetics::Model& m, const magnetics::State& s, c
     for (int c = m.body_cell_begin[b]; c < m.body_cell_begin[b + 1]; ++c) sum += s.total.cell[c].norm();
     bounds.push_back({s.body_pose[b].position + s.node_offset[root], m.node_radius[root], sum});
   }
-  const bool all = applied.norm() >= threshold;
   auto keep = [&](const Vec3& lo, const Vec3& hi) {
-    if (all) return true;
     double bound = 0;
     for (const Bound& bd : bounds) {
       const Vec3 nearest = bd.c.cwiseMax(lo).cwiseMin(hi);
@@ -48,7 +46,7 @@ void evaluate_field_grid(const magnetics::Model& m, const magnetics::State& s, c
     magnetics::field_at_targets(m, s, s.total, t, opt, B);
     const std::size_t offset = std::size_t(z0) * out.dims[0] * out.dims[1];
     for (std::size_t q = 0; q < B.size(); ++q) {
-      const Vec3 v = B[q] + applied;
+      const Vec3& v = B[q];
       const std::size_t idx = offset + t.original[q];
       out.bx[idx] = float(v[0]), out.by[idx] = float(v[1]), out.bz[idx] = float(v[2]);
     }

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <memory>
 
@@ -136,18 +137,22 @@ int run(int argc, char** argv) {
 
   std::string field_cache, field_frames, field_bounds;
   cli::FieldRequest field_req;
-  double field_voxel = 0, field_margin = -1;
+  double field_voxel = 0;
+  std::string field_margin, field_threshold;
   auto* field = app.add_subcommand("field", "B-field volumes (OpenVDB, one per frame) from a cache");
   field->add_option("cache", field_cache, "cache (.h5)")->required();
   field->add_option("--frames", field_frames, "frame range A-B (default: every frame of the cache)");
   field->add_option("-o,--output", field_req.pattern, "file pattern, e.g. out/field.####.vdb (default: outputs.field.path)");
   field->add_option("--voxel", field_voxel, "voxel edge in metres (default: outputs.field.voxel, else region/128)");
   field->add_option("--bounds", field_bounds, "region xmin,ymin,zmin,xmax,ymax,zmax in metres (default: auto)");
-  field->add_option("--margin", field_margin, "margin around the magnetic bodies for auto bounds, metres");
+  field->add_option("--margin", field_margin,
+                    "margin around the magnetic bodies for auto bounds, metres, or auto (default: outputs.field.margin, else auto)");
   field->add_option("--every", field_req.every,
                     "every n-th frame, counted from the shot's first frame (default: outputs.field.every, else 1)")
       ->check(CLI::Range(1, 1000000));
-  field->add_option("--threshold", field_req.threshold, "voxels with |B| below this (tesla) stay inactive")->capture_default_str();
+  field->add_option("--threshold", field_threshold,
+                    "voxels where the bodies' |B| is below this (tesla) stay inactive, or auto: 0.3% of the strongest "
+                    "remanence or applied field (default: outputs.field.threshold, else auto)");
   field->add_option("--theta", field_req.theta, "tree opening angle (accuracy, see docs)")->capture_default_str();
   field->add_flag("--allow-absolute-outputs", field_req.allow_absolute, "let an absolute outputs.field.path stored in the cache be used");
 
@@ -237,8 +242,24 @@ int run(int argc, char** argv) {
   if (*check && !number_ok("--trial", trial_seconds, 0, 1e6)) return cli::kUsage;  // CLI::Range lets NaN through
   if (*field) {
     if (field->count("--voxel") && !number_ok("--voxel", field_voxel, 1e-7, 1e4)) return cli::kUsage;
-    if (field->count("--margin") && !number_ok("--margin", field_margin, 0, 1e4)) return cli::kUsage;
-    if (!number_ok("--threshold", field_req.threshold, 0, 1e6) || !number_ok("--theta", field_req.theta, 0, 1)) {
+    // A number in [lo, hi] or the word auto: false (after logging) otherwise.
+    auto number_or_auto = [&](const char* option, const std::string& text, double lo, double hi,
+                              std::optional<double>& value, bool& is_auto) {
+      if (!field->count(option)) return true;
+      if (text == "auto") return is_auto = true;
+      char* end = nullptr;
+      const double v = std::strtod(text.c_str(), &end);
+      if (text.empty() || end != text.c_str() + text.size()) {
+        spdlog::error("{} expects a number or auto, got '{}'", option, text);
+        return false;
+      }
+      if (!number_ok(option, v, lo, hi)) return false;
+      value = v;
+      return true;
+    };
+    if (!number_or_auto("--margin", field_margin, 0, 1e4, field_req.margin, field_req.margin_auto) ||
+        !number_or_auto("--threshold", field_threshold, 0, 100, field_req.threshold, field_req.threshold_auto) ||
+        !number_ok("--theta", field_req.theta, 0, 1)) {
       return cli::kUsage;
     }
   }
@@ -264,7 +285,6 @@ int run(int argc, char** argv) {
   if (*field) {
     if (!frames_option(field_frames, field_req.frames)) return cli::kUsage;
     if (field_voxel > 0) field_req.voxel = field_voxel;
-    if (field_margin >= 0) field_req.margin = field_margin;
     if (!field_bounds.empty()) {
       double v[6];
       int used = 0;

@@ -3,7 +3,7 @@
 // `magbake field` runs: theta 0.25, single precision) and by direct summation (theta 0).
 //
 //   field_bench <resolution> <tree|direct> [theta] [threshold]   -> one CSV line on stdout
-// (theta default 0.15 and threshold 1e-5 T: magbake field's defaults). The field is saved as raw
+// (theta default 0.15, magbake field's default, and threshold 1e-5 T). The field is saved as raw
 // float32 triples (NaN = inactive) to /tmp/magbake_field_bench_<resolution>_<mode>_<theta>.f32.
 // Run each case in its own process (bench/run_field_bench.sh) so peak memory is per case.
 #include <sys/resource.h>
@@ -67,7 +67,7 @@ int main(int argc, char** argv) {
   opt.smear_inside = true;
   opt.single_precision = true;
   const auto t0 = std::chrono::steady_clock::now();
-  cli::evaluate_field_grid(model, st, opt, Vec3::Zero(), threshold, samples);
+  cli::evaluate_field_grid(model, st, opt, threshold, samples);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::size_t evaluated = 0;
   for (float x : samples.bx) evaluated += !std::isnan(x);

@@ -4,7 +4,8 @@ the picture in docs/usd.md. Meshes get a material from their displayColor primva
 colours), the field Volume a Principled Volume driven by its density grid; a camera looks at the
 bodies' bounding box from the front right.
 
-Usage (the venv of tests/usd, with bpy): render_usd_in_blender.py SHOT.usda FRAME OUT.png [WxH]
+Usage (the venv of tests/usd, with bpy):
+  render_usd_in_blender.py SHOT.usda FRAME OUT.png [WxH [DENSITY_SCALE [EMISSION_STRENGTH]]]
 """
 import sys
 
@@ -13,6 +14,8 @@ import numpy as np
 
 usd, frame, out = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 w, h = (int(v) for v in (sys.argv[4] if len(sys.argv) > 4 else "640x360").split("x"))
+DENSITY_SCALE = float(sys.argv[5]) if len(sys.argv) > 5 else 60.0       # extinction per metre at density 1
+EMISSION_STRENGTH = float(sys.argv[6]) if len(sys.argv) > 6 else 300.0  # emission per metre at density 1
 bpy.ops.wm.read_factory_settings(use_empty=True)
 bpy.ops.wm.usd_import(filepath=usd)
 scene = bpy.context.scene
@@ -24,20 +27,38 @@ attr = nodes.new("ShaderNodeAttribute")
 attr.attribute_name = "displayColor"
 mat.node_tree.links.new(attr.outputs["Color"], nodes["Principled BSDF"].inputs["Base Color"])
 nodes["Principled BSDF"].inputs["Roughness"].default_value = 0.45
+# The field Volume: docs/field-volumes.md's recipe. density is 0 at the edge of the active
+# region and 1 where |B| reaches the strongest remanence, so it drives a thin absorbing fog and an
+# emission coloured by a ramp (dark blue where weak, through cyan, to white at the poles).
 vmat = bpy.data.materials.new("field")
-vn = vmat.node_tree.nodes
+vn, vl = vmat.node_tree.nodes, vmat.node_tree.links
 vn.remove(vn["Principled BSDF"])
 pv = vn.new("ShaderNodeVolumePrincipled")
-pv.inputs["Density"].default_value = 0.0
-pv.inputs["Color"].default_value = (0.2, 0.6, 1.0, 1.0)
+pv.inputs["Color"].default_value = (0.05, 0.2, 0.6, 1.0)
 da = vn.new("ShaderNodeAttribute")
 da.attribute_name = "density"
-scale = vn.new("ShaderNodeMath")
-scale.operation = "MULTIPLY"
-scale.inputs[1].default_value = 60.0
-vmat.node_tree.links.new(da.outputs["Fac"], scale.inputs[0])
-vmat.node_tree.links.new(scale.outputs["Value"], pv.inputs["Density"])
-vmat.node_tree.links.new(pv.outputs["Volume"], vn["Material Output"].inputs["Volume"])
+fog = vn.new("ShaderNodeMath")
+fog.operation = "MULTIPLY"
+fog.inputs[1].default_value = DENSITY_SCALE
+vl.new(da.outputs["Fac"], fog.inputs[0])
+vl.new(fog.outputs["Value"], pv.inputs["Density"])
+ramp = vn.new("ShaderNodeValToRGB")
+ramp.color_ramp.elements[0].color = (0.0, 0.02, 0.25, 1.0)
+ramp.color_ramp.elements[1].color = (1.0, 0.95, 0.8, 1.0)
+mid = ramp.color_ramp.elements.new(0.5)
+mid.color = (0.0, 0.55, 1.0, 1.0)
+vl.new(da.outputs["Fac"], ramp.inputs["Fac"])
+vl.new(ramp.outputs["Color"], pv.inputs["Emission Color"])
+glow = vn.new("ShaderNodeMath")
+glow.operation = "POWER"
+glow.inputs[1].default_value = 2.0
+vl.new(da.outputs["Fac"], glow.inputs[0])
+strength = vn.new("ShaderNodeMath")
+strength.operation = "MULTIPLY"
+strength.inputs[1].default_value = EMISSION_STRENGTH
+vl.new(glow.outputs["Value"], strength.inputs[0])
+vl.new(strength.outputs["Value"], pv.inputs["Emission Strength"])
+vl.new(pv.outputs["Volume"], vn["Material Output"].inputs["Volume"])
 
 lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
 dg = bpy.context.evaluated_depsgraph_get()

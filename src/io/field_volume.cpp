@@ -5,6 +5,7 @@
 #include <openvdb/tools/Prune.h>
 
 #include <cmath>
+#include <sstream>
 #include <filesystem>
 #include <mutex>
 #include <ostream>
@@ -35,10 +36,13 @@ class ByteCounter : public std::streambuf {
 
 }  // namespace
 
-float display_density(float b) {
-  if (!(b > 1e-5f)) return 0.0f;
-  return std::min(1.0f, std::log10(b / 1e-5f) / 5.0f);
+float display_density(float b, double low, double high) {
+  if (!(b > low)) return 0.0f;
+  if (!(high > low) || b >= high) return 1.0f;
+  return static_cast<float>(std::log(b / low) / std::log(high / low));
 }
+
+double density_floor(const VolumeInfo& info) { return info.threshold > 0 ? info.threshold : kAutoThresholdFraction * info.reference; }
 
 std::size_t write_field_volume(const std::string& path, const FieldSamples& s, const VolumeInfo& info) {
   static std::once_flag init;
@@ -49,7 +53,8 @@ std::size_t write_field_volume(const std::string& path, const FieldSamples& s, c
   const Eigen::Vector3i i0(static_cast<int>(std::lround(s.origin[0] / s.voxel)),
                            static_cast<int>(std::lround(s.origin[1] / s.voxel)),
                            static_cast<int>(std::lround(s.origin[2] / s.voxel)));
-  auto B = openvdb::Vec3SGrid::create(openvdb::Vec3s(0, 0, 0));
+  const openvdb::Vec3s applied(float(s.applied[0]), float(s.applied[1]), float(s.applied[2]));
+  auto B = openvdb::Vec3SGrid::create(applied);
   auto density = openvdb::FloatGrid::create(0.0f);
   B->setTransform(xform);
   density->setTransform(xform->copy());
@@ -59,6 +64,7 @@ std::size_t write_field_volume(const std::string& path, const FieldSamples& s, c
   B->setGridClass(openvdb::GRID_UNKNOWN);
   density->setGridClass(openvdb::GRID_UNKNOWN);
   std::size_t active = 0;
+  const double low = density_floor(info);
   {
     auto ba = B->getAccessor();
     auto da = density->getAccessor();
@@ -71,8 +77,8 @@ std::size_t write_field_volume(const std::string& path, const FieldSamples& s, c
           const float mag = std::sqrt(x * x + y * y + z * z);
           if (!(mag >= info.threshold)) continue;
           const openvdb::Coord c(i0[0] + i, i0[1] + j, i0[2] + k);
-          ba.setValue(c, openvdb::Vec3s(x, y, z));
-          da.setValue(c, display_density(mag));
+          ba.setValue(c, openvdb::Vec3s(x, y, z) + applied);
+          da.setValue(c, display_density(mag, low, info.reference));
           ++active;
         }
       }
@@ -81,7 +87,11 @@ std::size_t write_field_volume(const std::string& path, const FieldSamples& s, c
   openvdb::tools::prune(B->tree());
   openvdb::tools::prune(density->tree());
   for (openvdb::GridBase* g : {static_cast<openvdb::GridBase*>(B.get()), static_cast<openvdb::GridBase*>(density.get())}) {
-    g->insertMeta("units", openvdb::StringMetadata(g == B.get() ? "tesla" : "log10(|B| / 1e-5 T) / 5, clamped to [0, 1]"));
+    std::ostringstream units;
+    units.precision(6);
+    if (g == B.get()) units << "tesla";
+    else units << "log(|B - applied| / " << low << " T) / log(" << info.reference << " T / " << low << " T), clamped to [0, 1]";
+    g->insertMeta("units", openvdb::StringMetadata(units.str()));
     g->insertMeta("frame", openvdb::Int32Metadata(info.frame));
     g->insertMeta("time", openvdb::DoubleMetadata(info.time));
     g->insertMeta("scene_hash", openvdb::StringMetadata(info.scene_hash));
@@ -96,6 +106,9 @@ std::size_t write_field_volume(const std::string& path, const FieldSamples& s, c
   file_meta.insertMeta("scene_name", openvdb::StringMetadata(info.scene_name));
   file_meta.insertMeta("voxel_size", openvdb::DoubleMetadata(s.voxel));
   file_meta.insertMeta("active_threshold_tesla", openvdb::DoubleMetadata(info.threshold));
+  file_meta.insertMeta("density_low_tesla", openvdb::DoubleMetadata(low));
+  file_meta.insertMeta("density_high_tesla", openvdb::DoubleMetadata(info.reference));
+  file_meta.insertMeta("applied_field_tesla", openvdb::Vec3DMetadata(openvdb::Vec3d(s.applied[0], s.applied[1], s.applied[2])));
   // Write under a temporary name, then rename: no partial file under the final name.
   const std::string tmp = path + ".tmp" + std::to_string(::getpid());
   try {

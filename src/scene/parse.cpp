@@ -375,10 +375,17 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
       if (const YAML::Node f = o["field"]; f.IsDefined()) {
         s.field_set = true;
         s.field_loc = loc_of(f);
-        if (r.mapping(f, "outputs.field", {"path", "voxel", "bounds", "margin", "every"}, {"path"}, s.field_loc)) {
+        if (r.mapping(f, "outputs.field", {"path", "voxel", "bounds", "margin", "every", "threshold"}, {"path"}, s.field_loc)) {
+          // A number, or the word auto (kept as text); any other word is refused as not a number.
+          auto number_or_auto = [&](const char* key, Val<double>& number, Val<std::string>& word) {
+            const YAML::Node n = f[key];
+            if (n.IsDefined() && n.IsScalar() && n.Scalar() == "auto") word = r.text(f, key, "outputs.field");
+            else number = r.number(f, key, "outputs.field");
+          };
           s.field_path = r.text(f, "path", "outputs.field");
           s.field_voxel = r.number(f, "voxel", "outputs.field");
-          s.field_margin = r.number(f, "margin", "outputs.field");
+          number_or_auto("margin", s.field_margin, s.field_margin_auto);
+          number_or_auto("threshold", s.field_threshold, s.field_threshold_auto);
           s.field_every = r.number(f, "every", "outputs.field");
           if (const YAML::Node bn = f["bounds"]; bn.IsDefined()) {
             if (bn.IsScalar()) {

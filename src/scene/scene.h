@@ -111,7 +111,8 @@ struct FieldOutput {
   std::optional<double> voxel;       ///< m; default: automatic from the bounds
   bool auto_bounds = true;
   Vec3 bounds_min = Vec3::Zero(), bounds_max = Vec3::Zero();  ///< m, world
-  double margin = 0.02;              ///< m, added around the magnetic bodies (auto bounds)
+  std::optional<double> margin;      ///< m, added around the magnetic bodies (auto bounds); unset = auto (docs/field-volumes.md)
+  std::optional<double> threshold;   ///< T, voxels where the bodies' |B| is below stay inactive; unset = auto (io::kAutoThresholdFraction of the strongest remanence or applied field)
   int every = 1;                     ///< write every n-th frame
 };
 

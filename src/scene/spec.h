@@ -109,7 +109,8 @@ struct SceneSpec {
   Loc field_loc;
   Val<std::string> field_path, field_bounds_auto;
   Val<std::vector<Vec>> field_bounds;
-  Val<double> field_voxel, field_margin, field_every;
+  Val<double> field_voxel, field_margin, field_every, field_threshold;
+  Val<std::string> field_margin_auto, field_threshold_auto;  ///< "auto" given for margin / threshold
   bool preview_set = false;
   Loc preview_loc;
   Val<std::string> preview_path;

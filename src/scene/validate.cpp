@@ -226,6 +226,13 @@ void read_outputs(const SceneSpec& s, double L, double A, Diagnostics& d, std::o
       if (!(s.field_margin.v >= 0)) d.add(s.field_margin.loc, "outputs.field.margin", "must be >= 0");
       else if (within(c, s.field_margin, "outputs.field.margin", kMaxLength, L, "m")) f.margin = s.field_margin.v * L;
     }
+    if (s.field_threshold.set) {
+      if (!(s.field_threshold.v >= 0 && s.field_threshold.v <= 100)) {
+        d.add(s.field_threshold.loc, "outputs.field.threshold", "must be 'auto' or from 0 to 100 (tesla)");
+      } else {
+        f.threshold = s.field_threshold.v;
+      }
+    }
     if (s.field_every.set) {
       if (!(s.field_every.v >= 1 && s.field_every.v <= kMaxFrames) || s.field_every.v != std::floor(s.field_every.v)) {
         d.add(s.field_every.loc, "outputs.field.every", "must be a whole number from 1 to 1000000");

@@ -151,7 +151,7 @@ TEST_F(Field, DefaultThetaKeepsTheWorstVoxelsWithinHalfAPercentOfDirectSummation
   std::ofstream(path) << scene.str();
   ASSERT_EQ(sh(exe() + " bake " + path + " -o " + dir.string()).code, 0);
   const std::string cache = (dir / "horseshoe.h5").string();
-  const std::string region = " --frames 1-1 --voxel 0.0008 --bounds=-0.045,-0.045,-0.02,0.045,0.045,0.03";
+  const std::string region = " --frames 1-1 --voxel 0.0008 --threshold 0 --bounds=-0.045,-0.045,-0.02,0.045,0.045,0.03";
   ASSERT_EQ(sh(exe() + " field " + cache + region + " -o " + (dir / "tree.####.vdb").string()).code, 0);
   ASSERT_EQ(sh(exe() + " field " + cache + region + " --theta 0 -o " + (dir / "direct.####.vdb").string()).code, 0);
   auto tree = openvdb::gridPtrCast<openvdb::Vec3SGrid>((*read(dir / "tree.0001.vdb"))[0]);
@@ -220,6 +220,174 @@ TEST_F(Field, NoMagneticBodiesBadRangesAndUnwritablePaths) {
   EXPECT_EQ(sh(exe() + " field " + (dir / "missing.h5").string()).code, 2);
   // Nothing half-written under a final name: only complete .vdb files, no temporaries.
   for (const auto& e : fs::directory_iterator(dir)) EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos);
+}
+
+// A magnet sphere (radius R mm, remanence Br along z) alone, static, in an optional uniform
+// applied field: outside, its field is exactly that of a point dipole m = Br (4/3) pi R³ / mu0.
+std::string sphere_magnet_scene(double radius_mm, const std::string& applied = "[0, 0, 0]") {
+  std::ostringstream o;
+  o << "magbake: 1\nname: sphere_magnet\nunits: {length: mm, angle: deg}\n"
+       "time: {fps: 30, frames: [1, 2], dt: 0.001}\ngravity: [0, 0, 0]\n"
+       "magnetics: {quality: default, external_field: " << applied << "}\n"
+       "materials:\n  N35: {kind: permanent, remanence: 1.2, density: 7500}\n"
+       "bodies:\n  - {name: ball, shape: {sphere: {radius: " << radius_mm << "}}, material: N35, "
+       "magnetization: [0, 0, 1], position: [0, 0, 0], motion: static}\n";
+  return o.str();
+}
+
+// |B| of the sphere's dipole at x (m, world), tesla.
+double sphere_dipole_field(double radius_m, const Eigen::Vector3d& x) {
+  const double m = 1.2 * (4.0 / 3.0) * M_PI * std::pow(radius_m, 3) / (4e-7 * M_PI);
+  const double r = x.norm();
+  const Eigen::Vector3d n = x / r, mv(0, 0, m);
+  return (1e-7 * (3.0 * n * n.dot(mv) - mv) / (r * r * r)).norm();
+}
+
+// Default volumes (docs/field-volumes.md "Sparsity and density"): the threshold is 0.3% of the
+// strongest remanence, the auto margin reaches the dipole's threshold distance on its axis, so
+// the active voxels are the ones where the closed-form |B| is above the threshold, and the
+// display density is log(|B| / threshold) / log(Br / threshold), 0 at the edge of the active
+// region. Checked against the closed form, voxel by voxel.
+TEST_F(Field, DefaultVolumesAreActiveWhereTheFieldIsAboveThreeThousandthsOfTheRemanence) {
+  std::ofstream(dir / "sphere.yaml") << sphere_magnet_scene(5) << "outputs: {cache: sphere.h5}\n";
+  ASSERT_EQ(sh(exe() + " bake " + (dir / "sphere.yaml").string() + " -q -o " + dir.string()).code, 0);
+  const Outcome r = sh(exe() + " field " + (dir / "sphere.h5").string() + " --frames 1-1 -o " + (dir / "f.####.vdb").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  openvdb::MetaMap::Ptr meta;
+  auto grids = read(dir / "f.0001.vdb", &meta);
+  auto B = openvdb::gridPtrCast<openvdb::Vec3SGrid>((*grids)[0]);
+  auto density = openvdb::gridPtrCast<openvdb::FloatGrid>((*grids)[1]);
+  const double thr = meta->metaValue<double>("active_threshold_tesla");
+  EXPECT_NEAR(thr, 0.003 * 1.2, 1e-12);
+  EXPECT_NEAR(meta->metaValue<double>("density_high_tesla"), 1.2, 1e-12);
+  // Auto bounds: the sphere's box plus the margin d - R, d = R (2/3 / 0.003)^(1/3) = 6.06 R.
+  const double d = 0.005 * std::cbrt((2.0 / 3.0) / 0.003);
+  const openvdb::CoordBBox box = B->evalActiveVoxelBoundingBox();
+  const openvdb::Vec3d lo = B->indexToWorld(box.min()), hi = B->indexToWorld(box.max());
+  EXPECT_NEAR(hi[2], d, 2 * B->voxelSize()[0]);  // the active region reaches the box's faces only on the axis
+  EXPECT_NEAR(lo[2], -d, 2 * B->voxelSize()[0]);
+  // Every voxel of the region: active exactly where the closed form is above the threshold
+  // (outside a 1% band around it, the field's own error being under 0.1% there).
+  const openvdb::Coord c0 = openvdb::Coord::round(B->worldToIndex(openvdb::Vec3d(-d, -d, -d)));
+  const openvdb::Coord c1 = openvdb::Coord::round(B->worldToIndex(openvdb::Vec3d(d, d, d)));
+  auto ba = B->getConstAccessor();
+  auto da = density->getConstAccessor();
+  std::size_t checked = 0, active = 0, total = 0, wrong = 0, bad_density = 0;
+  for (int i = c0.x(); i <= c1.x(); ++i) {
+    for (int j = c0.y(); j <= c1.y(); ++j) {
+      for (int k = c0.z(); k <= c1.z(); ++k) {
+        const openvdb::Coord c(i, j, k);
+        const openvdb::Vec3d w = B->indexToWorld(c);
+        const Eigen::Vector3d x(w[0], w[1], w[2]);
+        ++total;
+        active += ba.isValueOn(c);
+        if (x.norm() < 0.0055) continue;  // inside or touching the ball
+        const double exact = sphere_dipole_field(0.005, x);
+        if (std::abs(exact / thr - 1) < 0.01) continue;
+        ++checked;
+        if (ba.isValueOn(c) != (exact > thr)) ++wrong;
+        const double want = exact > thr ? std::min(1.0, std::log(exact / thr) / std::log(1.2 / thr)) : 0.0;
+        if (std::abs(da.getValue(c) - want) > 2e-3) ++bad_density;
+      }
+    }
+  }
+  EXPECT_GT(checked, 100000u);
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_EQ(bad_density, 0u);
+  // Sparse: the dipole's threshold surface r(theta) = d ((1 + 3 cos² theta) / 4)^(1/3) encloses
+  // (pi / 3) d³ (1 + asinh(sqrt 3) / (2 sqrt 3)) = 2.890 d³ of the (2d)³ box.
+  const double enclosed = M_PI / 3 * 2 * (1 + std::asinh(std::sqrt(3.0)) / (2 * std::sqrt(3.0))) / 8;
+  EXPECT_NEAR(double(active) / double(total), enclosed, 0.01);
+  std::printf("%zu voxels, %.1f%% active, %zu checked against the dipole\n", total, 100.0 * active / total, checked);
+}
+
+// A uniform applied field is part of B everywhere (the grid's background is the applied field),
+// but it neither makes voxels active nor shows in the density: the same magnet with and without
+// 50 mT applied has the same active voxels and density, and B differs by exactly the applied field.
+TEST_F(Field, AnAppliedFieldIsTheBackgroundAndLeavesSparsityAndDensityAlone) {
+  const Eigen::Vector3d applied(0.03, -0.04, 0.0);
+  for (const auto& [name, field] : {std::pair{"without", std::string("[0, 0, 0]")}, {"with", std::string("[0.03, -0.04, 0]")}}) {
+    std::ofstream(dir / (std::string(name) + ".yaml")) << sphere_magnet_scene(5, field) << "outputs: {cache: " << name << ".h5}\n";
+    ASSERT_EQ(sh(exe() + " bake " + (dir / (std::string(name) + ".yaml")).string() + " -q -o " + dir.string()).code, 0);
+    ASSERT_EQ(sh(exe() + " field " + (dir / (std::string(name) + ".h5")).string() + " --frames 1-1 --voxel 0.001 -o " +
+                 (dir / (std::string(name) + ".####.vdb")).string()).code, 0);
+  }
+  openvdb::MetaMap::Ptr meta;
+  auto a = read(dir / "without.0001.vdb"), b = read(dir / "with.0001.vdb", &meta);
+  auto Ba = openvdb::gridPtrCast<openvdb::Vec3SGrid>((*a)[0]), Bb = openvdb::gridPtrCast<openvdb::Vec3SGrid>((*b)[0]);
+  auto Da = openvdb::gridPtrCast<openvdb::FloatGrid>((*a)[1]), Db = openvdb::gridPtrCast<openvdb::FloatGrid>((*b)[1]);
+  EXPECT_EQ(Bb->background(), openvdb::Vec3s(0.03f, -0.04f, 0.0f));
+  EXPECT_EQ(Db->background(), 0.0f);
+  const openvdb::Vec3d stored = meta->metaValue<openvdb::Vec3d>("applied_field_tesla");
+  EXPECT_NEAR((Eigen::Vector3d(stored[0], stored[1], stored[2]) - applied).norm(), 0.0, 1e-15);
+  // 50 mT is 4% of the remanence, far above the 3.6 mT threshold: it would make every voxel active.
+  EXPECT_EQ(Ba->activeVoxelCount(), Bb->activeVoxelCount());
+  EXPECT_LT(Bb->activeVoxelCount(), Bb->evalActiveVoxelBoundingBox().volume());
+  auto bb = Bb->getConstAccessor();
+  auto db = Db->getConstAccessor();
+  double worst = 0;
+  std::size_t n = 0;
+  for (auto it = Ba->cbeginValueOn(); it; ++it, ++n) {
+    ASSERT_TRUE(bb.isValueOn(it.getCoord()));
+    const openvdb::Vec3s diff = bb.getValue(it.getCoord()) - *it;
+    worst = std::max(worst, (Eigen::Vector3d(diff[0], diff[1], diff[2]) - applied).norm());
+    ASSERT_EQ(db.getValue(it.getCoord()), Da->getConstAccessor().getValue(it.getCoord()));
+  }
+  EXPECT_GT(n, 1000u);
+  EXPECT_LT(worst, 1e-6);  // float rounding of |B| up to ~1 T
+}
+
+// Auto bounds, voxel and threshold scale with the scene: the same magnet ten times larger gives
+// a box ten times larger with the same voxels active.
+TEST_F(Field, DefaultVolumesScaleWithTheScene) {
+  std::size_t active[2];
+  double size[2];
+  for (int s = 0; s < 2; ++s) {
+    const std::string name = s ? "large" : "small";
+    std::ofstream(dir / (name + ".yaml")) << sphere_magnet_scene(s ? 50 : 5) << "outputs: {cache: " << name << ".h5}\n";
+    ASSERT_EQ(sh(exe() + " bake " + (dir / (name + ".yaml")).string() + " -q -o " + dir.string()).code, 0);
+    ASSERT_EQ(sh(exe() + " field " + (dir / (name + ".h5")).string() + " --frames 1-1 -o " + (dir / (name + ".####.vdb")).string()).code, 0);
+    auto g = read(dir / (name + ".0001.vdb"));
+    auto B = openvdb::gridPtrCast<openvdb::Vec3SGrid>((*g)[0]);
+    active[s] = B->activeVoxelCount();
+    size[s] = B->voxelSize()[0];
+  }
+  EXPECT_NEAR(size[1] / size[0], 10.0, 1e-9);
+  EXPECT_NEAR(double(active[1]) / double(active[0]), 1.0, 0.01);
+}
+
+// --threshold and --margin take a number or auto (overriding the scene); anything else is refused.
+TEST_F(Field, ThresholdAndMarginTakeANumberOrAuto) {
+  std::ofstream(dir / "s.yaml") << sphere_magnet_scene(5)
+                                << "outputs: {cache: s.h5, field: {path: 'v.####.vdb', threshold: 0.1, margin: 2}}\n";
+  ASSERT_EQ(sh(exe() + " bake " + (dir / "s.yaml").string() + " -q --cache-only -o " + dir.string()).code, 0);
+  const std::string cache = (dir / "s.h5").string();
+  auto threshold_of = [&](const std::string& args) {
+    const Outcome r = sh(exe() + " field " + cache + " --frames 1-1 --voxel 0.0005 -o " + (dir / "t.####.vdb").string() + " " + args);
+    EXPECT_EQ(r.code, 0) << r.out;
+    openvdb::MetaMap::Ptr meta;
+    auto g = read(dir / "t.0001.vdb", &meta);
+    auto density = openvdb::gridPtrCast<openvdb::FloatGrid>((*g)[1]);
+    return std::pair{meta->metaValue<double>("active_threshold_tesla"),
+                     density->evalActiveVoxelBoundingBox().dim().x() * density->voxelSize()[0]};
+  };
+  EXPECT_EQ(threshold_of("").first, 0.1);                       // the scene's
+  EXPECT_NEAR(threshold_of("--threshold auto").first, 0.0036, 1e-12);
+  EXPECT_EQ(threshold_of("--threshold 0.02").first, 0.02);
+  // Box widths, to a voxel at each end (the lattice is aligned to multiples of the voxel).
+  EXPECT_NEAR(threshold_of("--threshold 0").second, 0.014, 1e-3);  // the ball and the scene's margin of 2 mm
+  EXPECT_NEAR(threshold_of("--threshold 0 --margin 0.004").second, 0.018, 1e-3);
+  EXPECT_NEAR(threshold_of("--threshold 0 --margin auto").second, 2 * 0.005 * std::cbrt((2.0 / 3.0) / 0.003), 1e-3);
+  for (const std::string bad : {"--threshold automatic", "--threshold 1e-3x", "--threshold -1", "--threshold 1000",
+                                "--margin auto1", "--margin ''"}) {
+    const Outcome r = sh(exe() + " field " + cache + " --voxel 0.001 -o " + (dir / "b.####.vdb").string() + " " + bad);
+    EXPECT_EQ(r.code, 2) << bad << "\n" << r.out;
+  }
+  std::ofstream(dir / "bad.yaml") << sphere_magnet_scene(5) << "outputs: {cache: b.h5, field: {path: 'v.####.vdb', threshold: high}}\n";
+  const Outcome r = sh(exe() + " check " + (dir / "bad.yaml").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("bad.yaml:11:"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("outputs.field.threshold"), std::string::npos) << r.out;
 }
 
 TEST(PatternExpansion, HashesAndPrintf) {
