@@ -9,6 +9,7 @@
 
 #include "cli.h"
 #include "cache_export.h"
+#include "cache_state.h"
 #include "field_export.h"
 #include "file_lock.h"
 #include "preview_export.h"
@@ -151,7 +152,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
       writing = fs::path(partial.string() + ".resume");
       writer = std::make_unique<io::CacheWriter>(writing.string(), s, model, MAGBAKE_VERSION);
       writer->copy_frames_from(*previous, k);
-      simulator.restore(previous->sim_state(k - 1, s), last_good.frame);
+      simulator.restore(resume_state(*previous, k - 1, s), last_good.frame);
       kept = k;
       next_frame = last_good.frame + 1;
       spdlog::info("resuming after frame {} ({} frames kept from {})", last_good.frame, k, partial.string());
@@ -198,7 +199,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
     if (next_frame == s.first_frame) {
       if (next_frame >= first) {
         if (hooks.before_write) hooks.before_write(next_frame);
-        writer->append(next_frame, 0.0, simulator.state(), simulator.measure());
+        append_frame(*writer, next_frame, 0.0, simulator.state(), simulator.measure(), s);
         ++written;
         progress.update(next_frame - first + 1, next_frame, last);
       }
@@ -217,7 +218,7 @@ int cmd_bake(const std::string& path, const std::string& out_dir, const std::str
       rigid_seconds += d.rigid_seconds;
       if (simulator.frame() >= first) {
         if (hooks.before_write) hooks.before_write(simulator.frame());
-        writer->append(simulator.frame(), s.frame_time(simulator.frame()), simulator.state(), d);
+        append_frame(*writer, simulator.frame(), s.frame_time(simulator.frame()), simulator.state(), d, s);
         ++written;
       }
       progress.update(simulator.frame() - first + 1, simulator.frame(), last);

@@ -139,7 +139,7 @@ int cmd_info(const std::string& path, const Global& g) {
     std::cerr << "magbake info: " << path << ": no such file\n";
     return kUsage;
   }
-  if (H5Fis_hdf5(path.c_str()) > 0 || path.ends_with(".h5") || path.ends_with(".partial")) return cmd_info_cache(path, g.verbose);
+  if (io::is_hdf5_file(path) || path.ends_with(".h5") || path.ends_with(".partial")) return cmd_info_cache(path, g.verbose);
   auto s = load_or_report(path);
   if (!s) return kUsage;
   std::cout << scene_summary(*s, g.verbose);

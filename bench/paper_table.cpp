@@ -33,6 +33,7 @@
 #include <thread>
 #include <vector>
 
+#include "cache_state.h"
 #include "io/cache.h"
 #include "magnetics/system.h"
 #include "scene/load.h"
@@ -133,7 +134,7 @@ json time_window(const scene::Scene& sc, const magnetics::Model& model, const io
   tbb::global_control gc(tbb::global_control::max_allowed_parallelism, threads);
   sim::Simulator sim(sc, model);
   const int k = frame_index(cache, a.window_frame);
-  sim.restore(cache.sim_state(k, sc), a.window_frame);
+  sim.restore(cli::resume_state(cache, k, sc), a.window_frame);
   sim::FrameDiagnostics sum;
   const auto t0 = Clock::now();
   int frames = 0;
@@ -212,7 +213,7 @@ json measure_gain(const scene::Scene& sc, const magnetics::Model& model, const i
   const int last = std::min(sc.last_frame, a.window_frame + a.window_frames);
   for (int g = 0; g < a.gain_frames; ++g) {
     const int f = a.window_frame + (a.gain_frames == 1 ? 0 : (last - a.window_frame) * g / (a.gain_frames - 1));
-    const sim::SimState s = cache.sim_state(frame_index(cache, f), sc);
+    const sim::SimState s = cli::resume_state(cache, frame_index(cache, f), sc);
     const auto poses = poses_of(s);
     const Timed ad = time_evaluate(model, adaptive, poses, s.induced_moment, 3);
     const Timed all = time_evaluate(model, all_pairs, poses, s.induced_moment, 1);
@@ -340,7 +341,7 @@ ErrorStats force_error(const magnetics::Result& r, const magnetics::Result& ref)
 
 json error_at_instant(const scene::Scene& sc, const io::CacheReader& cache, const Args& a, int frame,
                       std::ofstream& csv) {
-  const sim::SimState s = cache.sim_state(frame_index(cache, frame), sc);
+  const sim::SimState s = cli::resume_state(cache, frame_index(cache, frame), sc);
   const auto poses = poses_of(s);
   const int all = hardware_threads();
 

@@ -25,7 +25,7 @@ struct Series {
 constexpr Series kBodySeries[] = {
     {"position", 3, "m"},        {"orientation", 4, ""},          {"velocity", 3, "m s-1"},
     {"angular_velocity", 3, "s-1"}, {"magnetic_force", 3, "kg m s-2"}, {"magnetic_torque", 3, "kg m2 s-2"},
-    // Sleeping (sim::SimState): state (0 awake, 1 resting, 2 asleep) and seconds at rest; the
+    // Sleeping: state (0 awake, 1 resting, 2 asleep) and seconds at rest; the
     // magnetic force and torque a sleeping body fell asleep with. Optional for readers (caches
     // before them have neither: every body awake).
     {"sleep", 2, ""}, {"sleep_reference", 6, ""}};
@@ -40,38 +40,6 @@ constexpr Series kObservables[] = {{"kinetic_energy", 1, "kg m2 s-2"},      {"gr
                                    {"sleeping", 1, ""},                     {"body_steps", 1, ""}};
 constexpr std::size_t kRequiredObservables = 14;  // "sleeping" and "body_steps" are optional when read
 
-static_assert(kStuckValues == sim::StuckJoint::kValues);
-
-// A stuck joint as a row of /contacts/stuck: a, b, then the members in declaration order
-// (matrices row-major).
-std::vector<double> stuck_row(const sim::StuckJoint& j) {
-  std::vector<double> r{double(j.a), double(j.b)};
-  auto put = [&](const auto& m) {
-    for (int i = 0; i < int(m.rows()); ++i)
-      for (int k = 0; k < int(m.cols()); ++k) r.push_back(m(i, k));
-  };
-  put(j.normal_in_a);
-  r.push_back(j.mu);
-  r.push_back(j.lever);
-  put(j.pivot_a), put(j.pivot_b), put(j.basis_a), put(j.basis_b), put(j.origin_a), put(j.origin_b);
-  return r;
-}
-
-sim::StuckJoint stuck_joint(const double* r) {
-  sim::StuckJoint j;
-  j.a = int(r[0]), j.b = int(r[1]);
-  int at = 2;
-  auto get = [&](auto& m) {
-    for (int i = 0; i < int(m.rows()); ++i)
-      for (int k = 0; k < int(m.cols()); ++k) m(i, k) = r[at++];
-  };
-  get(j.normal_in_a);
-  j.mu = r[at++];
-  j.lever = r[at++];
-  get(j.pivot_a), get(j.pivot_b), get(j.basis_a), get(j.basis_b), get(j.origin_a), get(j.origin_b);
-  return j;
-}
-
 std::vector<double> flat(const std::vector<Vec3>& v) {
   std::vector<double> out;
   out.reserve(3 * v.size());
@@ -80,6 +48,8 @@ std::vector<double> flat(const std::vector<Vec3>& v) {
 }
 
 }  // namespace
+
+bool is_hdf5_file(const std::string& path) { return H5Fis_hdf5(path.c_str()) > 0; }
 
 const char* status_name(BakeStatus s) {
   switch (s) {
@@ -324,7 +294,7 @@ CacheWriter::CacheWriter(const std::string& path, const scene::Scene& sc, const 
       const hsize_t ichunk = std::max<hsize_t>(1, std::min<hsize_t>(64, 16384 / m.ninduced));
       m.induced = h5::create_series(g.id(), "value", H5T_NATIVE_DOUBLE, {m.ninduced, 3}, ichunk, "A m2");
     }
-    // Stuck joints (sim::StuckJoint), ragged: frame k's are the next stuck_count[k] rows.
+    // Stuck joints (StuckRow), ragged: frame k's are the next stuck_count[k] rows.
     Handle contacts = h5::create_group(f, "contacts");
     m.stuck_count = h5::create_series(contacts.id(), "stuck_count", H5T_NATIVE_INT64, {}, 256);
     m.stuck = h5::create_series(contacts.id(), "stuck", H5T_NATIVE_DOUBLE, {kStuckValues}, 64);
@@ -351,27 +321,21 @@ CacheWriter::~CacheWriter() {
   }
 }
 
-void CacheWriter::append(int frame, double time, const sim::SimState& s, const sim::FrameDiagnostics& d) {
+void CacheWriter::append(const CacheFrame& fr, const FrameObservables& d, const std::vector<StuckRow>& stuck) {
   Impl& m = *impl_;
   const hsize_t row = frames_;
-  const auto& bodies = m.scene->bodies;
-  const std::size_t n = bodies.size();
+  const std::size_t n = m.scene->bodies.size();
+  const bool sized = fr.position.size() == n && fr.orientation.size() == n && fr.velocity.size() == n &&
+                     fr.angular_velocity.size() == n && fr.force.size() == n && fr.torque.size() == n &&
+                     (fr.sleep.empty() || (fr.sleep.size() == 2 * n && fr.sleep_reference.size() == 6 * n));
+  if (!sized) throw h5::Error("frame: wrong body count");
   // Body origin (scene frame), orientation (w, x, y, z), COM velocity, forces.
-  std::vector<double> pos, ori;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 p = sim::body_origin(s.com_position[i], s.orientation[i], bodies[i].com);
-    pos.insert(pos.end(), {p[0], p[1], p[2]});
-    const Quat& q = s.orientation[i];
-    ori.insert(ori.end(), {q.w(), q.x(), q.y(), q.z()});
-  }
-  std::vector<double> sleep(2 * n, 0.0), reference(6 * n, 0.0);
-  for (std::size_t i = 0; i < n && i < s.sleep.size(); ++i) {
-    sleep[2 * i] = s.sleep[i];
-    sleep[2 * i + 1] = s.rest_time[i];
-    for (int c = 0; c < 3; ++c) reference[6 * i + c] = s.sleep_force[i][c], reference[6 * i + 3 + c] = s.sleep_torque[i][c];
-  }
-  const std::vector<double> rows[] = {pos, ori, flat(s.velocity), flat(s.angular_velocity), flat(s.magnetic_force),
-                                      flat(s.magnetic_torque), sleep, reference};
+  std::vector<double> ori;
+  for (const Quat& q : fr.orientation) ori.insert(ori.end(), {q.w(), q.x(), q.y(), q.z()});
+  const std::vector<double> sleep = fr.sleep.empty() ? std::vector<double>(2 * n, 0.0) : fr.sleep;
+  const std::vector<double> reference = fr.sleep.empty() ? std::vector<double>(6 * n, 0.0) : fr.sleep_reference;
+  const std::vector<double> rows[] = {flat(fr.position), ori, flat(fr.velocity), flat(fr.angular_velocity), flat(fr.force),
+                                      flat(fr.torque), sleep, reference};
   static_assert(std::size(rows) == std::size(kBodySeries));
   for (std::size_t k = 0; k < m.body_series.size(); ++k) {
     h5::write_row(m.body_series[k].id(), H5T_NATIVE_DOUBLE, row, rows[k].data());
@@ -383,35 +347,32 @@ void CacheWriter::append(int frame, double time, const sim::SimState& s, const s
                            {d.angular_momentum[0], d.angular_momentum[1], d.angular_momentum[2]},
                            {d.magnetics_seconds},
                            {d.rigid_seconds},
-                           {double(d.cells_visited)},
-                           {double(d.induction_iterations)},
+                           {d.cells_visited},
+                           {d.induction_iterations},
                            {d.induction_residual},
-                           {double(d.substeps)},
+                           {d.substeps},
                            {d.energy_drift},
                            {d.max_speed},
                            {d.max_penetration},
-                           {double(d.sleeping)},
-                           {double(d.body_steps)}};
+                           {d.sleeping},
+                           {d.body_steps}};
   static_assert(std::size(obs) == std::size(kObservables));
   for (std::size_t k = 0; k < m.observables.size(); ++k) {
     h5::write_row(m.observables[k].id(), H5T_NATIVE_DOUBLE, row, obs[k]);
   }
   if (m.ninduced > 0) {
-    if (s.induced_moment.size() != m.ninduced) throw h5::Error("induced moments: wrong count");
-    h5::write_row(m.induced.id(), H5T_NATIVE_DOUBLE, row, flat(s.induced_moment).data());
+    if (fr.induced_moment.size() != m.ninduced) throw h5::Error("induced moments: wrong count");
+    h5::write_row(m.induced.id(), H5T_NATIVE_DOUBLE, row, flat(fr.induced_moment).data());
   }
   std::vector<double> joints;
-  for (const sim::StuckJoint& j : s.stuck_joints) {
-    const std::vector<double> r = stuck_row(j);
-    joints.insert(joints.end(), r.begin(), r.end());
-  }
-  h5::write_rows(m.stuck.id(), H5T_NATIVE_DOUBLE, m.stuck_rows, s.stuck_joints.size(), joints.data());
-  m.stuck_rows += s.stuck_joints.size();
-  const std::int64_t nstuck = static_cast<std::int64_t>(s.stuck_joints.size());
+  for (const StuckRow& r : stuck) joints.insert(joints.end(), r.begin(), r.end());
+  h5::write_rows(m.stuck.id(), H5T_NATIVE_DOUBLE, m.stuck_rows, stuck.size(), joints.data());
+  m.stuck_rows += stuck.size();
+  const std::int64_t nstuck = static_cast<std::int64_t>(stuck.size());
   h5::write_row(m.stuck_count.id(), H5T_NATIVE_INT64, row, &nstuck);
-  const std::int64_t step = frame;
+  const std::int64_t step = fr.frame;
   h5::write_row(m.step.id(), H5T_NATIVE_INT64, row, &step);
-  h5::write_row(m.time.id(), H5T_NATIVE_DOUBLE, row, &time);
+  h5::write_row(m.time.id(), H5T_NATIVE_DOUBLE, row, &fr.time);
   h5::check(H5Fflush(m.file.id(), H5F_SCOPE_GLOBAL), "flush frame");
   // Only now is the frame complete.
   const std::int64_t done = frames_ + 1;
@@ -626,62 +587,38 @@ CacheFrame CacheReader::frame(int index) const {
   return fr;
 }
 
-sim::SimState CacheReader::sim_state(int index, const scene::Scene& sc) const {
-  const CacheFrame fr = frame(index);
-  sim::SimState s;
-  s.resize(sc.bodies.size());
-  if (fr.position.size() != sc.bodies.size()) throw std::runtime_error(path_ + ": body count differs from the scene");
-  s.time = fr.time;
-  for (std::size_t i = 0; i < sc.bodies.size(); ++i) {
-    s.orientation[i] = fr.orientation[i];
-    s.com_position[i] = sim::com_from_origin(fr.position[i], fr.orientation[i], sc.bodies[i].com);
-    s.velocity[i] = fr.velocity[i];
-    s.angular_velocity[i] = fr.angular_velocity[i];
-    s.magnetic_force[i] = fr.force[i];
-    s.magnetic_torque[i] = fr.torque[i];
+double CacheReader::observable_at(const std::string& name, int index) const {
+  if (index < 0 || index >= frames_) throw std::runtime_error(path_ + ": frame index out of range");
+  const std::string path = "observables/" + name + "/value";
+  if (!h5::exists(file(), path)) throw std::runtime_error(path_ + ": holds no observable '" + name + "'");
+  const double v = h5::read_rows(file(), path, index, 1).at(0);
+  if (!std::isfinite(v)) {
+    throw std::runtime_error(path_ + ": frame index " + std::to_string(index) + " holds a non-finite " + name);
   }
-  s.induced_moment = fr.induced_moment;
-  s.magnetic_energy = h5::read_rows(file(), "observables/magnetic_energy/value", index, 1).at(0);
-  if (!std::isfinite(s.magnetic_energy)) {
-    throw std::runtime_error(path_ + ": frame " + std::to_string(fr.frame) + " holds a non-finite magnetic energy");
-  }
-  if (!layout_.stuck_begin.empty()) {
-    const std::int64_t begin = layout_.stuck_begin[index], end = layout_.stuck_begin[index + 1];
-    const std::vector<double> rows =
-        end > begin ? h5::read_rows(file(), "contacts/stuck", hsize_t(begin), hsize_t(end - begin)) : std::vector<double>{};
-    const int n = static_cast<int>(sc.bodies.size());
-    for (std::int64_t r = 0; r < end - begin; ++r) {
-      const double* v = rows.data() + r * kStuckValues;
-      bool ok = v[0] >= 0 && v[0] < v[1] && v[1] < n && v[0] == std::floor(v[0]) && v[1] == std::floor(v[1]);
-      for (std::size_t k = 2; k < kStuckValues; ++k) ok = ok && std::isfinite(v[k]);
-      if (ok) {
-        const sim::StuckJoint j = stuck_joint(v);
-        ok = s.stuck_joints.empty() || std::make_pair(s.stuck_joints.back().a, s.stuck_joints.back().b) < std::make_pair(j.a, j.b);
-        if (ok) s.stuck_joints.push_back(j);
-      }
-      if (!ok) {
-        throw std::runtime_error(path_ + ": frame " + std::to_string(fr.frame) + " holds an invalid stuck joint (row " +
-                                 std::to_string(begin + r) + " of /contacts/stuck)");
-      }
+  return v;
+}
+
+std::vector<StuckRow> CacheReader::stuck_rows(int index) const {
+  if (index < 0 || index >= frames_) throw std::runtime_error(path_ + ": frame index out of range");
+  std::vector<StuckRow> out;
+  if (layout_.stuck_begin.empty()) return out;
+  const std::int64_t begin = layout_.stuck_begin[index], end = layout_.stuck_begin[index + 1];
+  const std::vector<double> rows =
+      end > begin ? h5::read_rows(file(), "contacts/stuck", hsize_t(begin), hsize_t(end - begin)) : std::vector<double>{};
+  const double n = double(names_.size());
+  for (std::int64_t r = 0; r < end - begin; ++r) {
+    StuckRow row;
+    std::copy_n(rows.data() + r * kStuckValues, kStuckValues, row.begin());
+    bool ok = row[0] >= 0 && row[0] < row[1] && row[1] < n && row[0] == std::floor(row[0]) && row[1] == std::floor(row[1]);
+    for (std::size_t k = 2; k < kStuckValues; ++k) ok = ok && std::isfinite(row[k]);
+    ok = ok && (out.empty() || std::make_pair(out.back()[0], out.back()[1]) < std::make_pair(row[0], row[1]));
+    if (!ok) {
+      throw std::runtime_error(path_ + ": frame index " + std::to_string(index) + " holds an invalid stuck joint (row " +
+                               std::to_string(begin + r) + " of /contacts/stuck)");
     }
+    out.push_back(row);
   }
-  for (std::size_t i = 0; i < sc.bodies.size() && 2 * i + 1 < fr.sleep.size(); ++i) {
-    const double state = fr.sleep[2 * i], rest = fr.sleep[2 * i + 1];
-    if (!(state == 0 || state == 1 || state == 2) || !(rest >= 0 && rest < 1e12)) {
-      throw std::runtime_error(path_ + ": frame " + std::to_string(fr.frame) + " holds an invalid sleep state of body '" +
-                               sc.bodies[i].name + "'");
-    }
-    s.sleep[i] = static_cast<std::uint8_t>(state);
-    s.rest_time[i] = rest;
-    const double* r = fr.sleep_reference.data() + 6 * i;
-    s.sleep_force[i] = Vec3(r[0], r[1], r[2]);
-    s.sleep_torque[i] = Vec3(r[3], r[4], r[5]);
-    if (!s.sleep_force[i].allFinite() || !s.sleep_torque[i].allFinite()) {
-      throw std::runtime_error(path_ + ": frame " + std::to_string(fr.frame) + " holds a non-finite sleep reference of body '" +
-                               sc.bodies[i].name + "'");
-    }
-  }
-  return s;
+  return out;
 }
 
 RenderGeometry CacheReader::geometry() const {

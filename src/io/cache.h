@@ -12,16 +12,49 @@
 #include "h5.h"
 #include "magnetics/model.h"
 #include "scene/scene.h"
-#include "sim/sim_state.h"
 
 namespace magbake::io {
 
 using magnetics::Quat;
 using magnetics::Vec3;
 
+/// Whether `path` is an HDF5 file (by its signature), so commands that take a scene or a cache
+/// can tell them apart. False for a missing or unreadable file.
+bool is_hdf5_file(const std::string& path);
+
 /// What a cache says about how its bake ended (dataset /bake/status).
 enum class BakeStatus : int { kRunning = 0, kComplete = 1, kInterrupted = 2, kFailed = 3 };
 const char* status_name(BakeStatus s);
+
+/// The per-frame observables a cache stores (/observables, docs/cache-format.md): energies (J),
+/// momenta (kg m/s, kg m²/s), wall times (s), work counters, the last substep's induction
+/// residual, energy drift (J), the fastest body's speed (m/s), the deepest penetration (m) and
+/// the number of bodies asleep.
+struct FrameObservables {
+  double kinetic_energy = 0, gravity_energy = 0, magnetic_energy = 0;
+  Vec3 momentum = Vec3::Zero(), angular_momentum = Vec3::Zero();
+  double magnetics_seconds = 0, rigid_seconds = 0;
+  double cells_visited = 0, induction_iterations = 0, induction_residual = 0, substeps = 0;
+  double energy_drift = 0, max_speed = 0, max_penetration = 0, sleeping = 0, body_steps = 0;
+};
+
+/// One stuck contact joint as stored (a row of /contacts/stuck): the two body indices (a < b)
+/// then the joint's frames, kStuckValues doubles (layout in docs/cache-format.md; what they mean
+/// belongs to the simulator, bake/cache_state.cpp converts).
+using StuckRow = std::array<double, kStuckValues>;
+
+/// One frame as stored.
+struct CacheFrame {
+  int frame = 0;
+  double time = 0;
+  std::vector<Vec3> position;          ///< body origin (scene body frame), world, m
+  std::vector<Quat> orientation;       ///< body -> world
+  std::vector<Vec3> velocity, angular_velocity, force, torque;
+  std::vector<Vec3> induced_moment;    ///< world, A·m², Model::induced_cells order
+  /// (nbody x 2) sleep state and seconds at rest, (nbody x 6) wake-up reference force (N) and
+  /// torque (N·m); empty for caches written before sleeping (writing: empty = every body awake).
+  std::vector<double> sleep, sleep_reference;
+};
 
 /// Writes a cache. Frames must be appended in order.
 class CacheWriter {
@@ -33,8 +66,10 @@ class CacheWriter {
               const std::string& magbake_version);
   ~CacheWriter();
 
-  /// Appends one frame and flushes it to disk; frames_done is updated last.
-  void append(int frame, double time, const sim::SimState& s, const sim::FrameDiagnostics& d);
+  /// Appends one frame (its poses at the body origin, velocities, forces, induced moments, sleep
+  /// state), its observables and its stuck joints (ascending pairs), and flushes it to disk;
+  /// frames_done is updated last. Throws h5::Error (also for counts that do not fit the cache).
+  void append(const CacheFrame& frame, const FrameObservables& observables, const std::vector<StuckRow>& stuck);
   /// Copies the first `count` frames of `from` verbatim (bit for bit), for --resume.
   void copy_frames_from(const class CacheReader& from, int count);
   void set_status(BakeStatus status);
@@ -48,18 +83,6 @@ class CacheWriter {
   int frames_ = 0;
 };
 
-/// One frame as stored.
-struct CacheFrame {
-  int frame = 0;
-  double time = 0;
-  std::vector<Vec3> position;          ///< body origin (scene body frame), world, m
-  std::vector<Quat> orientation;       ///< body -> world
-  std::vector<Vec3> velocity, angular_velocity, force, torque;
-  std::vector<Vec3> induced_moment;    ///< world, A·m², Model::induced_cells order
-  /// (nbody x 2) sleep state and seconds at rest, (nbody x 6) wake-up reference force (N) and
-  /// torque (N·m); empty for caches written before sleeping (sim::SimState).
-  std::vector<double> sleep, sleep_reference;
-};
 
 /// The render geometry of a cache: every body's shape and parts as triangle meshes in the body
 /// frame (m). Indices are checked at open: triangles index `vertices`, submesh ranges lie inside.
@@ -111,8 +134,13 @@ class CacheReader {
   std::vector<double> observable(const std::string& name) const;
 
   CacheFrame frame(int index) const;                   ///< 0-based index of a completed frame
-  /// The simulation state of a stored frame (for --resume), given the scene's bodies.
-  sim::SimState sim_state(int index, const scene::Scene& scene) const;
+  /// One value of a scalar observable (e.g. "magnetic_energy") at a completed frame; throws
+  /// std::runtime_error when the cache does not hold it or it is not finite.
+  double observable_at(const std::string& name, int index) const;
+  /// The stuck joints stored with a completed frame (empty for caches written before them);
+  /// throws std::runtime_error for a row whose bodies are not a valid ascending pair or whose
+  /// values are not finite.
+  std::vector<StuckRow> stuck_rows(int index) const;
   /// The magnetic model (cells and hierarchies) rebuilt from the stored cells. If given,
   /// induced_order[k] receives the stored rank of the model's k-th induced cell (the order of
   /// CacheFrame::induced_moment), so frames' moments can be reordered for the model.
