@@ -32,6 +32,9 @@ struct FarmJob {
   std::string script_path;
   std::string script;
   int tasks = 1;  ///< array tasks (exports, wedges), 1 for the simulation
+  /// Stages (of jobs before it) it waits for, besides the first job: the USD stage waits for the
+  /// field volumes it references.
+  std::vector<std::string> after;
 };
 
 /// The jobs of one shot, in submission order (bake first), and its folders (absolute).

@@ -130,8 +130,23 @@ FarmPlan plan_farm(const scene::Scene& s, const FarmRequest& r) {
         quote(p.cache), quote(pattern));
     p.jobs.push_back(j);
   };
-  if (s.field) add_export("field", (out / fs::path(s.field->path).filename()).string(), std::max(1, s.field->every));
+  const std::string field_pattern = s.field ? (out / fs::path(s.field->path).filename()).string() : "";
+  if (s.field) add_export("field", field_pattern, std::max(1, s.field->every));
   if (s.preview) add_export("preview", (out / fs::path(s.preview->path).filename()).string(), 1);
+  // The USD stage (outputs.usd), once the cache and the volumes it references are written.
+  if (s.usd) {
+    FarmJob j;
+    j.stage = "usd";
+    j.script_path = (fs::path(p.farm_dir) / "usd.sh").string();
+    j.script = header(s.name + "-usd", (logs / "usd-%j.log").string(), r, cwd);
+    j.script += "#SBATCH --requeue\n";
+    j.script += fmt::format("# magbake farm: USD stage of {} from {}\n", s.name, p.cache);
+    j.script += fmt::format("exec {} {} export {} --usd {} --field {}\n", quote(exe), threads, quote(p.cache),
+                            quote((out / fs::path(*s.usd).filename()).string()),
+                            s.field ? quote(field_pattern) : std::string("none"));
+    if (s.field) j.after.push_back("field");
+    p.jobs.push_back(j);
+  }
   return p;
 }
 
@@ -277,8 +292,10 @@ int cmd_farm(const FarmRequest& r, const Global& g) {
     }
     std::printf("# submit with: sbatch --parsable %s", plan.jobs[0].script_path.c_str());
     for (std::size_t k = 1; k < plan.jobs.size(); ++k) {
-      std::printf("; sbatch --parsable --dependency=%s:<%s job> %s", plan.chain_any ? "afterany" : "afterok",
-                  plan.jobs[0].stage.c_str(), plan.jobs[k].script_path.c_str());
+      std::string waits = fmt::format("<{} job>", plan.jobs[0].stage);
+      for (const std::string& a : plan.jobs[k].after) waits += fmt::format(":<{} job>", a);
+      std::printf("; sbatch --parsable --dependency=%s:%s %s", plan.chain_any ? "afterany" : "afterok", waits.c_str(),
+                  plan.jobs[k].script_path.c_str());
     }
     std::printf("\n# (dry run: nothing written or submitted; --submit does both)\n");
     return kOk;
@@ -331,7 +348,11 @@ int cmd_farm(const FarmRequest& r, const Global& g) {
   std::string bake_id;
   for (const FarmJob& j : plan.jobs) {
     std::vector<std::string> argv{sbatch, "--parsable"};
-    if (&j != &plan.jobs.front()) argv.push_back((plan.chain_any ? "--dependency=afterany:" : "--dependency=afterok:") + bake_id);
+    if (&j != &plan.jobs.front()) {
+      std::string waits = bake_id;
+      for (const std::string& a : j.after) waits += ":" + ids.at(a).get<std::string>();
+      argv.push_back((plan.chain_any ? "--dependency=afterany:" : "--dependency=afterok:") + waits);
+    }
     argv.push_back(j.script_path);
     const ProcessResult pr = run_process(argv);
     // --parsable prints "jobid" or "jobid;cluster".

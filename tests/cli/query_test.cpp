@@ -306,6 +306,10 @@ TEST(FarmCommand, DryRunPrintsTheSimulationAndChunkedExportJobs) {
   EXPECT_NE(r.out.find("field '" + out + "/demo.h5' --frames $a-$b -o '" + out + "/field.####.vdb'"), std::string::npos);
   EXPECT_NE(r.out.find("preview '" + out + "/demo.h5' --frames $a-$b -o '" + out + "/preview.####.png'"),
             std::string::npos);
+  // The USD stage (outputs.usd) once the cache and the volumes it references are written.
+  EXPECT_NE(r.out.find("export '" + out + "/demo.h5' --usd '" + out + "/demo.usda' --field '" + out + "/field.####.vdb'\n"),
+            std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--dependency=afterok:<bake job>:<field job> " + out + "/farm/usd.sh"), std::string::npos);
   // A dry run writes nothing.
   EXPECT_FALSE(std::filesystem::exists(out));
 }

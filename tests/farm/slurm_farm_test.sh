@@ -48,9 +48,9 @@ wait_jobs() {
   return 1
 }
 
-submit() {  # folder -> prints the job ids "bake,field,preview"
+submit() {  # folder -> prints the job ids "bake field preview usd"
   "$exe" farm "$scene" -o "$1" --chunk 45 --submit > "$1.submit.txt" 2>&1 || { cat "$1.submit.txt"; fail "magbake farm --submit"; }
-  /usr/bin/python3 -c "import json,sys; j=json.load(open(sys.argv[1]))['jobs']; print(j['bake'], j['field'], j['preview'])" \
+  /usr/bin/python3 -c "import json,sys; j=json.load(open(sys.argv[1]))['jobs']; print(j['bake'], j['field'], j['preview'], j['usd'])" \
     "$1/farm/jobs.json"
 }
 
@@ -72,27 +72,30 @@ grids = {g.name for g in openvdb.readAllGridMetadata(sys.argv[1] + "/field.0046.
 assert "B" in grids, grids
 PY
   [ "$(head -c 8 "$d/preview.0045.png" | od -An -tx1 | tr -d ' \n')" = 89504e470d0a1a0a ] || fail "preview.0045.png is not a PNG"
+  # The USD stage, written after the volumes: every body and a time sample for each volume.
+  [ "$(head -n 1 "$d/demo.usda")" = "#usda 1.0" ] || fail "no USD stage in $d"
+  [ "$(grep -c "field\.[0-9]*\.vdb" "$d/demo.usda")" -ge 30 ] || fail "the USD stage does not reference the 30 volumes"
 }
 
 case "$which" in
   shot)
-    read -r bake field preview < <(submit "$work/shot")
-    echo "jobs: bake $bake, field $field, preview $preview"
-    wait_jobs "$bake,$field,$preview" || fail "jobs did not finish in 15 minutes"
+    read -r bake field preview usd < <(submit "$work/shot")
+    echo "jobs: bake $bake, field $field, preview $preview, usd $usd"
+    wait_jobs "$bake,$field,$preview,$usd" || fail "jobs did not finish in 15 minutes"
     grep -q "^Progress: bake 100% frame 90/90" "$work/shot/farm/logs/bake-$bake.log" || fail "no final progress line in the bake log"
     check_outputs "$work/shot"
     echo "PASSED: shot baked, exported and equal to the local bake"
     ;;
   preempt)
-    read -r bake field preview < <(submit "$work/pre")
-    echo "jobs: bake $bake, field $field, preview $preview"
+    read -r bake field preview usd < <(submit "$work/pre")
+    echo "jobs: bake $bake, field $field, preview $preview, usd $usd"
     log="$work/pre/farm/logs/bake-$bake.log"
     # Requeue once the bake is past 20% and before it ends.
     for _ in $(seq 6000); do grep -qE "^Progress: bake ([2-9][0-9])% " "$log" 2>/dev/null && break; sleep 0.02; done
     grep -qE "^Progress: bake ([2-9][0-9])% " "$log" || fail "the bake never reached 20%: $(cat "$log")"
     grep -q "^Progress: bake 100%" "$log" && fail "the bake finished before it could be preempted"
     scontrol requeue "$bake" || fail "scontrol requeue $bake"
-    wait_jobs "$bake,$field,$preview" || fail "jobs did not finish in 15 minutes"
+    wait_jobs "$bake,$field,$preview,$usd" || fail "jobs did not finish in 15 minutes"
     grep -v "^Progress\|^ALF" "$log"
     grep -q "interrupted: frames up to" "$log" || fail "the preempted bake did not stop at a frame (exit 75)"
     grep -q "resuming after frame" "$log" || fail "the requeued bake did not resume from its partial cache"
