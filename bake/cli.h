@@ -67,6 +67,7 @@ struct UsdRequest {
   /// Field volume files to reference ("name.####.vdb"); "" = outputs.field.path's file name beside
   /// the cache when those files exist; "none" = no volume.
   std::string field_pattern;
+  bool field_lines = false;  ///< the previews' field lines as BasisCurves, traced at every frame
 };
 int cmd_export_usd(const std::string& cache, const UsdRequest& request, const Global& g);
 int cmd_info(const std::string& path, const Global& g);

@@ -10,6 +10,7 @@
 #include "cache_export.h"
 #include "cli.h"
 #include "field_export.h"
+#include "field_lines.h"
 #include "io/cache.h"
 #include "io/field_volume.h"
 #include "magnetics/system.h"
@@ -183,13 +184,7 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
       spdlog::warn("interrupted after {} volumes", done);
       return kInterrupted;
     }
-    // Poses (centre-of-mass frames) and the stored induced moments.
-    for (int body = 0; body < model.body_count; ++body) {
-      st.body_pose[body] = magnetics::Pose{fr.orientation[body], fr.position[body] + fr.orientation[body] * coms[body]};
-    }
-    std::vector<Vec3> induced(model.induced_cells.size());
-    for (std::size_t k = 0; k < induced.size(); ++k) induced[k] = fr.induced_moment.at(induced_order[k]);
-    magnetics::place(model, st, induced);
+    place_frame(model, coms, induced_order, fr, st);  // poses and the stored induced moments
     io::FieldSamples samples;
     samples.origin = lo;
     samples.voxel = voxel;

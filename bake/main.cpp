@@ -182,6 +182,8 @@ int run(int argc, char** argv) {
   exp->add_option("--field", usd_req.field_pattern,
                   "field volumes to reference, e.g. out/field.####.vdb (default: outputs.field.path beside the cache if "
                   "written; none: no volume)");
+  exp->add_flag("--field-lines", usd_req.field_lines,
+                "add the previews' field lines as a BasisCurves prim with a time sample per frame");
 
   auto* check = app.add_subcommand("check", "validate a scene and print a one-screen summary with its cost (exit 0/2)");
   check->add_option("scene", scene_path, "scene file (YAML)")->required();

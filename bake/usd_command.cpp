@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -14,7 +15,9 @@
 
 #include "cache_export.h"
 #include "cli.h"
+#include "field_lines.h"
 #include "io/cache.h"
+#include "progress.h"
 #include "scene/frame_pattern.h"
 #include "shot_geometry.h"
 
@@ -231,6 +234,65 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
       o << "    }\n";
     }
   }
+  // Field lines: the previews' streamlines, one time sample per frame (their number and length
+  // change from frame to frame, so the topology is time-sampled too).
+  std::size_t line_points = 0;
+  if (req.field_lines && magnetic_any) {
+    const magnetics::Box3 region = field_line_region(shot_box(geo, frames));
+    const std::vector<Vec3> coms = cache->centers_of_mass();
+    const std::vector<double> ext = cache->parameter_doubles("external_field");
+    const Vec3 applied(ext.at(0), ext.at(1), ext.at(2));
+    magnetics::State st;
+    st.resize(model);
+    std::ostringstream counts, points, colors, extents;
+    Progress progress("usd", "field lines", static_cast<int>(frames.size()), g.quiet);
+    int done = 0;
+    for (const io::CacheFrame& fr : frames) {
+      if (interrupt_requested()) {
+        progress.finish();
+        spdlog::warn("interrupted: {} not written", req.usd);
+        return kInterrupted;
+      }
+      place_frame(model, coms, induced_order, fr, st);
+      const std::vector<render::Polyline> lines = trace_field_lines(model, st, applied, region);
+      render::Vec3f lo = render::Vec3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
+      counts << "                " << fr.frame << ": [";
+      points << "                " << fr.frame << ": [";
+      colors << "                " << fr.frame << ": [";
+      bool first = true;
+      for (std::size_t l = 0; l < lines.size(); ++l) {
+        counts << (l ? ", " : "") << lines[l].points.size();
+        for (std::size_t k = 0; k < lines[l].points.size(); ++k, first = false) {
+          const render::Vec3f& p = lines[l].points[k];
+          lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+          points << (first ? "" : ", ") << fmt::format("({:.6g}, {:.6g}, {:.6g})", p[0], p[1], p[2]);
+          const render::Vec3f& c = lines[l].colors[k];
+          colors << (first ? "" : ", ") << fmt::format("({:.3g}, {:.3g}, {:.3g})", c[0], c[1], c[2]);
+          ++line_points;
+        }
+      }
+      counts << "],\n";
+      points << "],\n";
+      colors << "],\n";
+      if (lines.empty()) lo = hi = render::Vec3f::Zero();
+      extents << "                " << fr.frame << ": [" << vecf(lo) << ", " << vecf(hi) << "],\n";
+      progress.update(++done, fr.frame, b);
+    }
+    progress.finish();
+    const double width = 0.002 * region.sizes().maxCoeff();
+    o << "\n    def BasisCurves \"field_lines\" (\n        doc = \"streamlines of B as magbake preview draws them, "
+         "coloured by log |B| (violet 10 uT, teal 1 mT, yellow 1 T)\"\n    )\n    {\n";
+    o << "        uniform token type = \"linear\"\n        uniform token wrap = \"nonperiodic\"\n";
+    o << "        int[] curveVertexCounts.timeSamples = {\n" << counts.str() << "        }\n";
+    o << "        point3f[] points.timeSamples = {\n" << points.str() << "        }\n";
+    o << "        float3[] extent.timeSamples = {\n" << extents.str() << "        }\n";
+    o << "        color3f[] primvars:displayColor (\n            interpolation = \"vertex\"\n        )\n";
+    o << "        color3f[] primvars:displayColor.timeSamples = {\n" << colors.str() << "        }\n";
+    o << "        float[] widths = [" << f(float(width)) << "] (\n            interpolation = \"constant\"\n        )\n";
+    o << "    }\n";
+  } else if (req.field_lines) {
+    spdlog::warn("no magnetic body: no field lines");
+  }
   o << "}\n";
 
   std::error_code ec;
@@ -252,8 +314,9 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
     return kFailure;
   }
   if (!g.quiet) {
-    spdlog::info("wrote {}: {} bodies, frames {}-{}{}", req.usd, n, a, b,
-                 volumes > 0 ? fmt::format(", field volumes of {} frames", volumes) : std::string());
+    spdlog::info("wrote {}: {} bodies, frames {}-{}{}{}", req.usd, n, a, b,
+                 volumes > 0 ? fmt::format(", field volumes of {} frames", volumes) : std::string(),
+                 req.field_lines && magnetic_any ? fmt::format(", field lines ({} points)", line_points) : std::string());
   }
   return kOk;
 }

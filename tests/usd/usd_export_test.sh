@@ -61,4 +61,45 @@ assert times == [1.0, 3.0], times
 assert all(b.GetFilePathAttr().Get(t).resolvedPath for t in times)
 print("outputs.usd: written by the bake, Volume at frames 1 and 3")
 PY
+# --field-lines: the previews' streamlines as BasisCurves, each frame's topology its own time
+# sample; at frame 1 (the scene at t = 0) the lines run along B as `magbake probe` gives it.
+"$exe" --quiet export "$work/shot/sphere_pickup.h5" --usd "$work/lines.usda" --frames 1-2 --field none --field-lines
+"$venv/bin/python" - "$work/lines.usda" "$work/mid.txt" <<'PY'
+import sys
+import numpy as np
+from pxr import Usd, UsdGeom
+s = Usd.Stage.Open(sys.argv[1])
+c = UsdGeom.BasisCurves(s.GetPrimAtPath("/sphere_pickup/field_lines"))
+assert c, "no BasisCurves prim"
+assert c.GetTypeAttr().Get() == "linear"
+for t in (1, 2):
+    n, p = c.GetCurveVertexCountsAttr().Get(t), c.GetPointsAttr().Get(t)
+    col = c.GetDisplayColorPrimvar().Get(t)
+    assert len(n) >= 10 and sum(n) == len(p) == len(col), (t, len(n), sum(n), len(p), len(col))
+    lo, hi = np.array(c.GetExtentAttr().Get(t))
+    assert (np.array(p) >= lo - 1e-6).all() and (np.array(p) <= hi + 1e-6).all()
+assert c.GetDisplayColorPrimvar().GetInterpolation() == "vertex"
+# Midpoints and directions of every 7th segment of frame 1, for probe.
+n, p = c.GetCurveVertexCountsAttr().Get(1), np.array(c.GetPointsAttr().Get(1), dtype=float)
+mids, dirs, at = [], [], 0
+for k in n:
+    for j in range(at, at + k - 1, 7):
+        mids.append((p[j] + p[j + 1]) / 2); dirs.append(p[j + 1] - p[j])
+    at += k
+np.savetxt(sys.argv[2], np.array(mids))
+np.save(sys.argv[2] + ".dirs.npy", np.array(dirs))
+print(f"field lines: {len(n)} curves, {len(p)} points at frame 1; {len(mids)} segments checked against probe")
+PY
+"$exe" probe "$src/tests/golden/sphere_pickup.yaml" --points "$work/mid.txt" --json 2>/dev/null > "$work/probe.json"
+"$venv/bin/python" - "$work/mid.txt" "$work/probe.json" <<'PY'
+import json, sys
+import numpy as np
+d = np.load(sys.argv[1] + ".dirs.npy")
+B = np.array(json.load(open(sys.argv[2]))["B"])
+strong = np.linalg.norm(B, axis=1) > 1e-4
+cos = np.abs(np.sum(d * B, axis=1)) / (np.linalg.norm(d, axis=1) * np.linalg.norm(B, axis=1) + 1e-300)
+share = float(np.mean(cos[strong] > 0.99))
+print(f"segments along B (|cos| > 0.99): {100 * share:.1f}% of {strong.sum()}, median |cos| {np.median(cos[strong]):.5f}")
+assert strong.sum() > 50 and share > 0.95, share
+PY
 echo "PASS"
