@@ -1,0 +1,44 @@
+#!/usr/bin/env python3
+"""A soft ball next to a ball magnet: magbake eval's force on the ball at draft, default, default
+with grading 1 and high, against the exact Legendre series (tests/data/soft_sphere_series.json,
+scripts/make_soft_sphere_series.py), with each evaluation's wall time (one process per case,
+including loading the scene and building the cells).
+
+Usage: bench/run_soft_series.py [build dir] [results dir]
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+build = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "build")
+out = sys.argv[2] if len(sys.argv) > 2 else os.path.join(here, "bench/results/soft_series")
+exe = os.path.join(build, "bake/magbake")
+ref = json.load(open(os.path.join(here, "tests/data/soft_sphere_series.json")))
+presets = [("draft", ""), ("default", ""), ("default+grading1", ", grading: 1"), ("high", "")]
+os.makedirs(out, exist_ok=True)
+cpu = next(l.split(":")[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name"))
+lines = ["# Soft ball next to a ball magnet against the exact series", "",
+         f"machine: {os.cpu_count()} cores, {cpu}; load before: {open('/proc/loadavg').read().split()[:3]}", "",
+         "Relative error of the force on the soft ball (N) and wall time of `magbake eval` per case.", "",
+         "| case | exact force | " + " | ".join(p for p, _ in presets) + " |",
+         "| --- | ---: | " + " | ".join("---" for _ in presets) + " |"]
+with tempfile.TemporaryDirectory() as tmp:
+    scene = os.path.join(tmp, "s.yaml")
+    for c in ref["cases"]:
+        row = [c["name"], f"{c['reference']:.5g} N"]
+        for name, cell in presets:
+            with open(scene, "w") as f:
+                f.write(c["scene"].replace("QUALITY", name.split("+")[0]).replace("CELL", cell))
+            t0 = time.time()
+            r = subprocess.run([exe, "eval", scene, "--json"], capture_output=True, text=True, check=True)
+            dt = time.time() - t0
+            force = json.loads(r.stdout[: r.stdout.rfind("}") + 1])["bodies"][0]["force"][2]
+            row.append(f"{100 * (force / c['reference'] - 1):+.2f}% ({dt:.2f} s)")
+        lines.append("| " + " | ".join(row) + " |")
+        print(lines[-1], flush=True)
+lines += ["", f"load after: {open('/proc/loadavg').read().split()[:3]}"]
+open(os.path.join(out, "soft_series.md"), "w").write("\n".join(lines) + "\n")
