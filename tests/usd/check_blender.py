@@ -3,7 +3,10 @@
 --usd`: every body's object has the cache's world transform at several frames, the field Volume
 loads its B and density grids, and a small Cycles render of the shot is not blank.
 
-Usage: check_blender.py SHOT.usda CACHE.h5 PNG
+The stage's field lines (BasisCurves) come in as a Curves object with the curves and points
+usd-core reads at frame 1.
+
+Usage: check_blender.py SHOT.usda CACHE.h5 PNG CURVES POINTS
 """
 import sys
 
@@ -13,6 +16,7 @@ import numpy as np
 from mathutils import Quaternion
 
 usd_path, cache_path, png = sys.argv[1], sys.argv[2], sys.argv[3]
+want_curves, want_points = int(sys.argv[4]), int(sys.argv[5])
 cache = h5py.File(cache_path, "r", swmr=True)
 steps = cache["frames/step"][:].astype(int)
 names = [n.decode() if isinstance(n, bytes) else n for n in cache["bodies/name"][:]]
@@ -47,6 +51,14 @@ vol.data.grids.load()
 grids = sorted(g.name for g in vol.data.grids)
 assert grids == ["B", "density"], grids
 print("field volume:", vol.data.filepath, grids)
+
+# The field lines: a Curves object, at frame 1 the stage's curves and points.
+lines = bpy.data.objects["field_lines"]
+assert lines.type == "CURVES", lines.type
+scene.frame_set(int(steps[0]))
+data = lines.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
+assert (len(data.curves), len(data.points)) == (want_curves, want_points), (len(data.curves), len(data.points))
+print(f"field lines: a Curves object, {len(data.curves)} curves of {len(data.points)} points at frame {steps[0]}")
 
 # A small Cycles frame: a camera looking at the bodies, a lit world; not blank.
 lo = np.min(pos[0], axis=0) - 0.03
