@@ -20,6 +20,7 @@
 #include "progress.h"
 #include "scene/frame_pattern.h"
 #include "shot_geometry.h"
+#include "usd_layer.h"
 
 namespace magbake::cli {
 namespace fs = std::filesystem;
@@ -40,45 +41,24 @@ std::string prim_name(const std::string& name, std::set<std::string>& used) {
   return out;
 }
 
-// A USDA string literal.
-std::string quoted(const std::string& s) {
-  std::string out(1, '"');
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (c == '\n') {
-      out += "\\n";
-      continue;
-    }
-    out += c;
-  }
-  out.push_back('"');
-  return out;
-}
-
-// Doubles round-trip exactly with 17 significant digits.
-std::string d(double v) { return fmt::format("{:.17g}", v); }
-std::string f(float v) { return fmt::format("{:.9g}", v); }
-std::string vec(const Vec3& v) { return fmt::format("({:.17g}, {:.17g}, {:.17g})", v[0], v[1], v[2]); }
-std::string vecf(const render::Vec3f& v) { return fmt::format("({:.9g}, {:.9g}, {:.9g})", v[0], v[1], v[2]); }
-
-// An asset path relative to the layer's folder when that is possible.
+// An asset path relative to the layer's folder when that is possible (without the @ quotes).
 std::string asset(const fs::path& file, const fs::path& layer_dir) {
   std::error_code ec;
   const fs::path rel = fs::relative(fs::absolute(file), fs::absolute(layer_dir), ec);
   const std::string p = (ec || rel.empty()) ? fs::absolute(file).string() : fmt::format("./{}", rel.string());
-  return fmt::format("@{}@", p);
+  return p;
 }
 
 }  // namespace
 
 int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const Global& g) {
-  const fs::path usd(req.usd);
-  if (usd.extension() != ".usda") {
-    spdlog::error("--usd {}: magbake writes USD as text (.usda); convert it with `usdcat {} -o shot.usdc` if you need "
-                  "the binary form",
-                  req.usd, usd.filename().replace_extension(".usda").string());
+  const fs::path stage_path(req.usd);
+  const std::string ext = stage_path.extension().string();
+  if (ext != ".usda" && ext != ".usdc" && ext != ".usd") {
+    spdlog::error("--usd {}: the stage's name must end in .usda (text), .usdc or .usd (binary crate)", req.usd);
     return kUsage;
   }
+  const bool binary = ext != ".usda";
   std::optional<io::CacheReader> cache;
   int a = 0, b = 0;
   if (const int rc = open_cache_range(cache_path, req.frames, cache, a, b); rc != kOk) return rc;
@@ -119,58 +99,57 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
     if (fr.frame >= a && fr.frame <= b) frames.push_back(std::move(fr));
   }
 
-  std::ostringstream o;
+  // The stage as a layer (bake/usd_layer.h), written as USDA or USDC below.
+  usd::Layer layer;
   std::set<std::string> used;
   const std::string shot = prim_name(fs::path(cache_path).stem().string(), used);
-  o << "#usda 1.0\n(\n";
-  o << "    defaultPrim = " << quoted(shot) << "\n";
-  o << "    doc = " << quoted("magbake bake " + fs::path(cache_path).filename().string() + ", frames " + std::to_string(a) +
-                             "-" + std::to_string(b) + " (magbake export --usd)")
-    << "\n";
-  o << "    endTimeCode = " << b << "\n";
-  o << "    framesPerSecond = " << d(cache->fps()) << "\n";
-  o << "    metersPerUnit = 1\n";
-  o << "    startTimeCode = " << a << "\n";
-  o << "    timeCodesPerSecond = " << d(cache->fps()) << "\n";
-  o << "    upAxis = \"Z\"\n)\n\n";
-  o << "def Xform " << quoted(shot) << " (\n    kind = \"assembly\"\n)\n{\n";
-  o << "    def Scope \"bodies\"\n    {\n";
+  layer.default_prim = shot;
+  layer.doc = "magbake bake " + fs::path(cache_path).filename().string() + ", frames " + std::to_string(a) + "-" +
+              std::to_string(b) + " (magbake export --usd)";
+  layer.start = a, layer.end = b, layer.fps = cache->fps();
+  usd::Prim root{shot, "Xform", "assembly"};
+  usd::Prim bodies{"bodies", "Scope"};
+  auto v3 = [](const Vec3& v) { return usd::Vec3d{v[0], v[1], v[2]}; };
+  auto v3f = [](const render::Vec3f& v) { return usd::Vec3f{v[0], v[1], v[2]}; };
+  auto sampled = [&](const std::string& name, const std::string& type, bool custom, auto value_at) {
+    usd::Attribute at{name, type, custom};
+    for (const io::CacheFrame& fr : frames) at.samples.emplace_back(double(fr.frame), value_at(fr));
+    return at;
+  };
   std::set<std::string> body_used;
   for (std::size_t i = 0; i < n; ++i) {
     const std::string prim = prim_name(names[i], body_used);
-    o << "        def Xform " << quoted(prim) << " (\n            customData = {\n                string magbake_name = "
-      << quoted(names[i]) << "\n            }\n        )\n        {\n";
+    usd::Prim body{prim, "Xform"};
+    body.custom_data = {{"magbake_name", names[i]}};
     // Body origin (the scene's shape origin, world frame) and orientation, as the cache stores
     // them: transforming the body-frame meshes below with them puts them where the bake had them.
-    o << "            double3 xformOp:translate.timeSamples = {\n";
-    for (const io::CacheFrame& fr : frames) o << "                " << fr.frame << ": " << vec(fr.position[i]) << ",\n";
-    o << "            }\n            quatd xformOp:orient.timeSamples = {\n";
-    for (const io::CacheFrame& fr : frames) {
+    body.attributes.push_back(
+        sampled("xformOp:translate", "double3", false, [&](const io::CacheFrame& fr) { return usd::Value(v3(fr.position[i])); }));
+    body.attributes.push_back(sampled("xformOp:orient", "quatd", false, [&](const io::CacheFrame& fr) {
       const Quat q = fr.orientation[i].normalized();
-      o << "                " << fr.frame << ": (" << d(q.w()) << ", " << d(q.x()) << ", " << d(q.y()) << ", " << d(q.z())
-        << "),\n";
-    }
-    o << "            }\n            uniform token[] xformOpOrder = [\"xformOp:translate\", \"xformOp:orient\"]\n";
-    o << "            custom double magbake:mass = " << d(i < info.size() ? info[i].mass : 0.0) << "\n";
-    o << "            custom string magbake:material = " << quoted(i < info.size() ? info[i].material : "") << "\n";
-    o << "            custom string magbake:motion = " << quoted(i < info.size() ? info[i].motion : "") << "\n";
-    o << "            custom double3 magbake:magneticForce.timeSamples = {\n";
-    for (const io::CacheFrame& fr : frames) o << "                " << fr.frame << ": " << vec(fr.force[i]) << ",\n";
-    o << "            }\n";
+      return usd::Value(usd::Quatd{q.w(), q.x(), q.y(), q.z()});
+    }));
+    usd::Attribute order{"xformOpOrder", "token[]"};
+    order.uniform = true;
+    order.value = std::vector<usd::Token>{{"xformOp:translate"}, {"xformOp:orient"}};
+    body.attributes.push_back(order);
+    body.attributes.push_back({"magbake:mass", "double", true, false, usd::Value(i < info.size() ? info[i].mass : 0.0)});
+    body.attributes.push_back({"magbake:material", "string", true, false, usd::Value(i < info.size() ? info[i].material : "")});
+    body.attributes.push_back({"magbake:motion", "string", true, false, usd::Value(i < info.size() ? info[i].motion : "")});
+    body.attributes.push_back(
+        sampled("magbake:magneticForce", "double3", true, [&](const io::CacheFrame& fr) { return usd::Value(v3(fr.force[i])); }));
     if (magnetic_any) {
       // Total magnetic moment, world frame: the permanent cells turned with the body plus the
       // induced moments of its cells.
-      o << "            custom double3 magbake:magneticMoment.timeSamples = {\n";
-      for (const io::CacheFrame& fr : frames) {
+      body.attributes.push_back(sampled("magbake:magneticMoment", "double3", true, [&](const io::CacheFrame& fr) {
         Vec3 m = fr.orientation[i].normalized() * permanent[i];
         for (std::size_t k = 0; k < model.induced_cells.size() && k < induced_order.size(); ++k) {
           const int c = model.induced_cells[k];
           const std::size_t r = static_cast<std::size_t>(induced_order[k]);
           if (static_cast<std::size_t>(model.cell_body[c]) == i && r < fr.induced_moment.size()) m += fr.induced_moment[r];
         }
-        o << "                " << fr.frame << ": " << vec(m) << ",\n";
-      }
-      o << "            }\n";
+        return usd::Value(v3(m));
+      }));
     }
     // Render meshes (as the previews draw them), body frame, one colour per triangle.
     // A body of one mesh names it after itself (Blender's import merges such an Xform and its
@@ -186,26 +165,31 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
       const std::size_t nt = mesh.positions.size() / 3;
       render::Vec3f lo = mesh.positions[0], hi = mesh.positions[0];
       for (const auto& p : mesh.positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-      o << "            def Mesh " << quoted(mesh_name) << "\n            {\n";
-      o << "                float3[] extent = [" << vecf(lo) << ", " << vecf(hi) << "]\n";
-      o << "                int[] faceVertexCounts = [";
-      for (std::size_t t = 0; t < nt; ++t) o << (t ? ", 3" : "3");
-      o << "]\n                int[] faceVertexIndices = [";
-      for (std::size_t v = 0; v < 3 * nt; ++v) o << (v ? ", " : "") << v;
-      o << "]\n                point3f[] points = [";
-      for (std::size_t v = 0; v < 3 * nt; ++v) o << (v ? ", " : "") << vecf(mesh.positions[v]);
-      o << "]\n                color3f[] primvars:displayColor = [";
-      for (std::size_t t = 0; t < nt; ++t) o << (t ? ", " : "") << vecf(mesh.colors[3 * t]);
-      o << "] (\n                    interpolation = \"uniform\"\n                )\n";
+      usd::Prim m{mesh_name, "Mesh"};
+      m.attributes.push_back({"extent", "float3[]", false, false, usd::Value(std::vector<usd::Vec3f>{v3f(lo), v3f(hi)})});
+      m.attributes.push_back({"faceVertexCounts", "int[]", false, false, usd::Value(std::vector<int>(nt, 3))});
+      std::vector<int> indices(3 * nt);
+      for (std::size_t v = 0; v < 3 * nt; ++v) indices[v] = static_cast<int>(v);
+      m.attributes.push_back({"faceVertexIndices", "int[]", false, false, usd::Value(std::move(indices))});
+      std::vector<usd::Vec3f> points, colors;
+      for (std::size_t v = 0; v < 3 * nt; ++v) points.push_back(v3f(mesh.positions[v]));
+      for (std::size_t t = 0; t < nt; ++t) colors.push_back(v3f(mesh.colors[3 * t]));
+      m.attributes.push_back({"points", "point3f[]", false, false, usd::Value(std::move(points))});
+      usd::Attribute color{"primvars:displayColor", "color3f[]", false, false, usd::Value(std::move(colors))};
+      color.interpolation = "uniform";
+      m.attributes.push_back(std::move(color));
       if (mesh.alpha < 1.0f) {
-        o << "                float[] primvars:displayOpacity = [" << f(mesh.alpha)
-          << "] (\n                    interpolation = \"constant\"\n                )\n";
+        usd::Attribute opacity{"primvars:displayOpacity", "float[]", false, false, usd::Value(std::vector<float>{mesh.alpha})};
+        opacity.interpolation = "constant";
+        m.attributes.push_back(std::move(opacity));
       }
-      o << "                uniform token subdivisionScheme = \"none\"\n            }\n";
+      usd::Attribute scheme{"subdivisionScheme", "token", false, true, usd::Value(usd::Token{"none"})};
+      m.attributes.push_back(std::move(scheme));
+      body.children.push_back(std::move(m));
     }
-    o << "        }\n";
+    bodies.children.push_back(std::move(body));
   }
-  o << "    }\n";
+  root.children.push_back(std::move(bodies));
 
   // Field volumes: one Volume whose two OpenVDB fields point at the frame's file.
   int volumes = 0;
@@ -213,27 +197,29 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
     std::vector<std::pair<int, std::string>> files;
     for (const io::CacheFrame& fr : frames) {
       const fs::path file = expand_pattern(field_pattern, fr.frame);
-      if (fs::exists(file)) files.emplace_back(fr.frame, asset(file, usd.parent_path().empty() ? fs::path(".") : usd.parent_path()));
+      if (fs::exists(file)) files.emplace_back(fr.frame, asset(file, stage_path.parent_path().empty() ? fs::path(".") : stage_path.parent_path()));
     }
     if (files.empty()) {
       spdlog::warn("no field volume {} found for frames {}-{}: the stage has no Volume ({} writes them)", field_pattern, a,
                    b, "magbake field");
     } else {
       volumes = static_cast<int>(files.size());
-      o << "\n    def Volume \"field\"\n    {\n";
-      o << "        rel field:B = </" << shot << "/field/B>\n";
-      o << "        rel field:density = </" << shot << "/field/density>\n";
+      usd::Prim volume{"field", "Volume"};
+      volume.relationships.push_back({"field:B", {fmt::format("/{}/field/B", shot)}});
+      volume.relationships.push_back({"field:density", {fmt::format("/{}/field/density", shot)}});
       for (const char* grid : {"B", "density"}) {
-        o << "\n        def OpenVDBAsset " << quoted(grid) << "\n        {\n";
-        o << "            token fieldDataType = " << (grid[0] == 'B' ? "\"float3\"" : "\"float\"") << "\n";
-        o << "            token fieldName = " << quoted(grid) << "\n";
-        o << "            asset filePath.timeSamples = {\n";
-        for (const auto& [frame, path] : files) o << "                " << frame << ": " << path << ",\n";
-        o << "            }\n        }\n";
+        usd::Prim g{grid, "OpenVDBAsset"};
+        g.attributes.push_back({"fieldDataType", "token", false, false, usd::Value(usd::Token{grid[0] == 'B' ? "float3" : "float"})});
+        g.attributes.push_back({"fieldName", "token", false, false, usd::Value(usd::Token{grid})});
+        usd::Attribute path{"filePath", "asset"};
+        for (const auto& [frame, file] : files) path.samples.emplace_back(double(frame), usd::Value(usd::Asset{file}));
+        g.attributes.push_back(std::move(path));
+        volume.children.push_back(std::move(g));
       }
-      o << "    }\n";
+      root.children.push_back(std::move(volume));
     }
   }
+
   // Field lines: the previews' streamlines, one time sample per frame (their number and length
   // change from frame to frame, so the topology is time-sampled too).
   std::size_t line_points = 0;
@@ -244,7 +230,9 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
     const Vec3 applied(ext.at(0), ext.at(1), ext.at(2));
     magnetics::State st;
     st.resize(model);
-    std::ostringstream counts, points, colors, extents;
+    usd::Attribute counts{"curveVertexCounts", "int[]"}, points{"points", "point3f[]"}, colors{"primvars:displayColor", "color3f[]"},
+        extents{"extent", "float3[]"};
+    colors.interpolation = "vertex";
     Progress progress("usd", "field lines", static_cast<int>(frames.size()), g.quiet);
     int done = 0;
     for (const io::CacheFrame& fr : frames) {
@@ -256,51 +244,54 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
       place_frame(model, coms, induced_order, fr, st);
       const std::vector<render::Polyline> lines = trace_field_lines(model, st, applied, region);
       render::Vec3f lo = render::Vec3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
-      counts << "                " << fr.frame << ": [";
-      points << "                " << fr.frame << ": [";
-      colors << "                " << fr.frame << ": [";
-      bool first = true;
-      for (std::size_t l = 0; l < lines.size(); ++l) {
-        counts << (l ? ", " : "") << lines[l].points.size();
-        for (std::size_t k = 0; k < lines[l].points.size(); ++k, first = false) {
-          const render::Vec3f& p = lines[l].points[k];
-          lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-          points << (first ? "" : ", ") << fmt::format("({:.6g}, {:.6g}, {:.6g})", p[0], p[1], p[2]);
-          const render::Vec3f& c = lines[l].colors[k];
-          colors << (first ? "" : ", ") << fmt::format("({:.3g}, {:.3g}, {:.3g})", c[0], c[1], c[2]);
-          ++line_points;
+      std::vector<int> n_of;
+      std::vector<usd::Vec3f> p, c;
+      for (const render::Polyline& line : lines) {
+        n_of.push_back(static_cast<int>(line.points.size()));
+        for (std::size_t k = 0; k < line.points.size(); ++k) {
+          lo = lo.cwiseMin(line.points[k]), hi = hi.cwiseMax(line.points[k]);
+          p.push_back(v3f(line.points[k]));
+          c.push_back(v3f(line.colors[k]));
         }
       }
-      counts << "],\n";
-      points << "],\n";
-      colors << "],\n";
       if (lines.empty()) lo = hi = render::Vec3f::Zero();
-      extents << "                " << fr.frame << ": [" << vecf(lo) << ", " << vecf(hi) << "],\n";
+      line_points += p.size();
+      const double t = fr.frame;
+      counts.samples.emplace_back(t, usd::Value(std::move(n_of)));
+      points.samples.emplace_back(t, usd::Value(std::move(p)));
+      colors.samples.emplace_back(t, usd::Value(std::move(c)));
+      extents.samples.emplace_back(t, usd::Value(std::vector<usd::Vec3f>{v3f(lo), v3f(hi)}));
       progress.update(++done, fr.frame, b);
     }
     progress.finish();
-    const double width = 0.002 * region.sizes().maxCoeff();
-    o << "\n    def BasisCurves \"field_lines\" (\n        doc = \"streamlines of B as magbake preview draws them, "
-         "coloured by log |B| (violet 10 uT, teal 1 mT, yellow 1 T)\"\n    )\n    {\n";
-    o << "        uniform token type = \"linear\"\n        uniform token wrap = \"nonperiodic\"\n";
-    o << "        int[] curveVertexCounts.timeSamples = {\n" << counts.str() << "        }\n";
-    o << "        point3f[] points.timeSamples = {\n" << points.str() << "        }\n";
-    o << "        float3[] extent.timeSamples = {\n" << extents.str() << "        }\n";
-    o << "        color3f[] primvars:displayColor (\n            interpolation = \"vertex\"\n        )\n";
-    o << "        color3f[] primvars:displayColor.timeSamples = {\n" << colors.str() << "        }\n";
-    o << "        float[] widths = [" << f(float(width)) << "] (\n            interpolation = \"constant\"\n        )\n";
-    o << "    }\n";
+    usd::Prim curves{"field_lines", "BasisCurves"};
+    curves.doc = "streamlines of B as magbake preview draws them, coloured by log |B| (violet 10 uT, teal 1 mT, yellow 1 T)";
+    curves.attributes.push_back({"type", "token", false, true, usd::Value(usd::Token{"linear"})});
+    curves.attributes.push_back({"wrap", "token", false, true, usd::Value(usd::Token{"nonperiodic"})});
+    curves.attributes.push_back(std::move(counts));
+    curves.attributes.push_back(std::move(points));
+    curves.attributes.push_back(std::move(extents));
+    curves.attributes.push_back(std::move(colors));
+    usd::Attribute widths{"widths", "float[]", false, false, usd::Value(std::vector<float>{float(0.002 * region.sizes().maxCoeff())})};
+    widths.interpolation = "constant";
+    curves.attributes.push_back(std::move(widths));
+    root.children.push_back(std::move(curves));
   } else if (req.field_lines) {
     spdlog::warn("no magnetic body: no field lines");
   }
-  o << "}\n";
+  layer.prims.push_back(std::move(root));
 
   std::error_code ec;
-  if (!usd.parent_path().empty()) fs::create_directories(usd.parent_path(), ec);
+  if (!stage_path.parent_path().empty()) fs::create_directories(stage_path.parent_path(), ec);
   const fs::path tmp = fs::path(req.usd + ".partial");
   {
     std::ofstream out(tmp, std::ios::binary);
-    out << o.str();
+    if (binary) {
+      const std::vector<char> bytes = usd::to_usdc(layer);
+      out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    } else {
+      out << usd::to_usda(layer);
+    }
     out.close();
     if (!out) {
       spdlog::error("cannot write {}", tmp.string());
@@ -308,7 +299,7 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
       return kFailure;
     }
   }
-  fs::rename(tmp, usd, ec);
+  fs::rename(tmp, stage_path, ec);
   if (ec) {
     spdlog::error("cannot move {} to {}: {}", tmp.string(), req.usd, ec.message());
     return kFailure;

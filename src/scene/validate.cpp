@@ -665,8 +665,9 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
   if (s.usd.set) {
     if (const auto e = output_path_error(s.usd.v, true)) {
       d.add(s.usd.loc, "outputs.usd", *e);
-    } else if (std::filesystem::path(s.usd.v).extension() != ".usda") {
-      d.add(s.usd.loc, "outputs.usd", "expected a .usda file (USD text; `usdcat` converts it to .usdc), got '" + s.usd.v + "'");
+    } else if (const std::string ext = std::filesystem::path(s.usd.v).extension().string();
+               ext != ".usda" && ext != ".usdc" && ext != ".usd") {
+      d.add(s.usd.loc, "outputs.usd", "expected a .usda (text), .usdc or .usd (binary) file, got '" + s.usd.v + "'");
     } else {
       sc.usd = s.usd.v;
     }

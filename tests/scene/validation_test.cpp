@@ -53,11 +53,13 @@ TEST(SceneValidation, UnknownKeyWithSuggestion) {
   EXPECT_NE(d.format().find("test.yaml:10:5: bodies[0].restitutoin: unknown key"), std::string::npos) << d.format();
 }
 
-// outputs.usd: a .usda path inside the output folder; anything else at its file:line:col.
+// outputs.usd: a .usda, .usdc or .usd path inside the output folder; anything else at its file:line:col.
 TEST(SceneValidation, OutputsUsdIsAUsdaPathInsideTheOutputFolder) {
   const std::string body = "bodies:\n  - {name: a, shape: {sphere: {radius: 2}}, material: steel}\n";
   EXPECT_TRUE(problems(kHead + kMat + body + "outputs:\n  usd: out/shot.usda\n").empty());
-  EXPECT_TRUE(has(problems(kHead + kMat + body + "outputs:\n  usd: out/shot.usdc\n"), 9, 8, "expected a .usda file"));
+  EXPECT_TRUE(problems(kHead + kMat + body + "outputs:\n  usd: out/shot.usdc\n").empty());
+  EXPECT_TRUE(problems(kHead + kMat + body + "outputs:\n  usd: out/shot.usd\n").empty());
+  EXPECT_TRUE(has(problems(kHead + kMat + body + "outputs:\n  usd: out/shot.usdz\n"), 9, 8, "expected a .usda (text), .usdc or .usd"));
   EXPECT_TRUE(has(problems(kHead + kMat + body + "outputs:\n  usd: ../shot.usda\n"), 9, 8, "outputs.usd"));
   EXPECT_TRUE(has(problems(kHead + kMat + body + "outputs:\n  usd: [1, 2]\n"), 9, 8, "outputs.usd"));
 }

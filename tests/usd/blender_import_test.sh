@@ -22,7 +22,7 @@ trap 'rm -rf "$work"' EXIT
 set -e
 "$exe" --quiet bake "$src/tests/golden/sphere_pickup.yaml" -o "$work" > /dev/null
 "$exe" --quiet field "$work/sphere_pickup.h5" --frames 1-3 -o "$work/vdb/field.####.vdb" > /dev/null
-"$exe" --quiet export "$work/sphere_pickup.h5" --usd "$work/shot.usda" --field "$work/vdb/field.####.vdb" --field-lines > /dev/null
+"$exe" --quiet export "$work/sphere_pickup.h5" --usd "$work/shot.usdc" --field "$work/vdb/field.####.vdb" --field-lines > /dev/null
 # The field lines' size at frame 1 as usd-core reads it, for Blender's import to match.
 lines=$("$venv/bin/python" -c "
 import sys
@@ -30,7 +30,7 @@ from pxr import Usd, UsdGeom
 stage = Usd.Stage.Open(sys.argv[1])  # held: a prim lives only as long as its stage
 c = UsdGeom.BasisCurves(stage.GetPrimAtPath('/sphere_pickup/field_lines'))
 n = c.GetCurveVertexCountsAttr().Get(1)
-print(len(n), sum(n))" "$work/shot.usda")
-"$venv/bin/python" "$src/tests/usd/check_blender.py" "$work/shot.usda" "$work/sphere_pickup.h5" "$work/render.png" $lines 2>&1 |
+print(len(n), sum(n))" "$work/shot.usdc")
+"$venv/bin/python" "$src/tests/usd/check_blender.py" "$work/shot.usdc" "$work/sphere_pickup.h5" "$work/render.png" $lines 2>&1 |
   grep -v '^Fra:'
 echo "PASS"

@@ -6,7 +6,7 @@ loads its B and density grids, and a small Cycles render of the shot is not blan
 The stage's field lines (BasisCurves) come in as a Curves object with the curves and points
 usd-core reads at frame 1.
 
-Usage: check_blender.py SHOT.usda CACHE.h5 PNG CURVES POINTS
+Usage: check_blender.py SHOT.usd[ac] CACHE.h5 PNG CURVES POINTS
 """
 import sys
 

@@ -27,15 +27,20 @@ set -e
 "$exe" --quiet bake "$src/tests/golden/sphere_pickup.yaml" -o "$work/shot"
 "$exe" --quiet field "$work/shot/sphere_pickup.h5" --frames 1-3 -o "$work/shot/vdb/field.####.vdb"
 "$exe" export "$work/shot/sphere_pickup.h5" --usd "$work/shot/usd/shot.usda" --field "$work/shot/vdb/field.####.vdb"
-# Refusals: a binary .usdc (not written here) and a field pattern without a frame field.
+# Refusals: a stage name that is not .usda/.usdc/.usd, and a field pattern without a frame field.
 set +e
-"$exe" --quiet export "$work/shot/sphere_pickup.h5" --usd "$work/x.usdc" >/dev/null 2>&1
-[ $? -eq 2 ] || { echo "FAIL: --usd x.usdc should exit 2"; exit 1; }
+"$exe" --quiet export "$work/shot/sphere_pickup.h5" --usd "$work/x.usdz" >/dev/null 2>&1
+[ $? -eq 2 ] || { echo "FAIL: --usd x.usdz should exit 2"; exit 1; }
 "$exe" --quiet export "$work/shot/sphere_pickup.h5" --usd "$work/x.usda" --field "$work/f.vdb" >/dev/null 2>&1
 [ $? -eq 2 ] || { echo "FAIL: --field without #### should exit 2"; exit 1; }
 [ ! -e "$work/x.usda" ] || { echo "FAIL: a refused export wrote a file"; exit 1; }
 set -e
 "$venv/bin/python" "$src/tests/usd/check_usd.py" "$work/shot/usd/shot.usda" "$work/shot/sphere_pickup.h5" 3
+# The binary form (USDC, magbake's crate writer): the same checks, and the same stage as the text
+# form value for value.
+"$exe" export "$work/shot/sphere_pickup.h5" --usd "$work/shot/usd/shot.usdc" --field "$work/shot/vdb/field.####.vdb"
+"$venv/bin/python" "$src/tests/usd/check_usd.py" "$work/shot/usd/shot.usdc" "$work/shot/sphere_pickup.h5" 3
+"$venv/bin/python" "$src/tests/usd/compare_stages.py" "$work/shot/usd/shot.usda" "$work/shot/usd/shot.usdc"
 # A frame range: the stage's time codes follow it.
 "$exe" --quiet export "$work/shot/sphere_pickup.h5" --usd "$work/part.usda" --frames 5-9 --field none
 "$venv/bin/python" - "$work/part.usda" <<'PY'
@@ -64,6 +69,8 @@ PY
 # --field-lines: the previews' streamlines as BasisCurves, each frame's topology its own time
 # sample; at frame 1 (the scene at t = 0) the lines run along B as `magbake probe` gives it.
 "$exe" --quiet export "$work/shot/sphere_pickup.h5" --usd "$work/lines.usda" --frames 1-2 --field none --field-lines
+"$exe" --quiet export "$work/shot/sphere_pickup.h5" --usd "$work/lines.usdc" --frames 1-2 --field none --field-lines
+"$venv/bin/python" "$src/tests/usd/compare_stages.py" "$work/lines.usda" "$work/lines.usdc"
 "$venv/bin/python" - "$work/lines.usda" "$work/mid.txt" <<'PY'
 import sys
 import numpy as np
