@@ -38,7 +38,7 @@ MagneticExtent magnetic_extent(const io::CacheReader& cache, const magnetics::Mo
                                const std::vector<int>& induced_order, double threshold) {
   const io::RenderGeometry geo = cache.geometry();
   const int nb = model.body_count;
-  // Per body: centre and radius of its meshes (body frame), permanent moment (body frame).
+  // Per body: centre and radius of its meshes (body frame).
   std::vector<magnetics::Box3> local(nb);
   for (const io::RenderGeometry::Submesh& s : geo.submeshes) {
     for (std::int64_t v = s.vertex_begin; v < s.vertex_begin + s.vertex_count; ++v) local[s.body].extend(geo.vertices[v]);
@@ -49,16 +49,11 @@ MagneticExtent magnetic_extent(const io::CacheReader& cache, const magnetics::Mo
       radius[s.body] = std::max(radius[s.body], (geo.vertices[v] - local[s.body].center()).norm());
     }
   }
-  std::vector<Vec3> permanent(nb, Vec3::Zero());
-  for (int c = 0; c < model.cell_count(); ++c) permanent[model.cell_body[c]] += model.cell_moment[c];
+  const std::vector<Vec3> permanent = body_permanent_moments(model);
   MagneticExtent out;
-  std::vector<Vec3> net(nb);
   for (int i = 0; i < cache.frame_count(); ++i) {
     const io::CacheFrame fr = cache.frame(i);
-    for (int b = 0; b < nb; ++b) net[b] = fr.orientation[b] * permanent[b];
-    for (std::size_t k = 0; k < model.induced_cells.size(); ++k) {
-      net[model.cell_body[model.induced_cells[k]]] += fr.induced_moment.at(induced_order[k]);
-    }
+    const std::vector<Vec3> net = body_moments(model, permanent, induced_order, fr);
     for (const io::RenderGeometry::Submesh& s : geo.submeshes) {
       if (model.body_root[s.body] < 0) continue;  // not magnetic
       for (std::int64_t v = s.vertex_begin; v < s.vertex_begin + s.vertex_count; ++v) {

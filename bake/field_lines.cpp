@@ -28,6 +28,22 @@ void place_frame(const magnetics::Model& model, const std::vector<Vec3>& coms, c
   magnetics::place(model, st, induced);
 }
 
+std::vector<Vec3> body_permanent_moments(const magnetics::Model& model) {
+  std::vector<Vec3> out(model.body_count, Vec3::Zero());
+  for (int c = 0; c < model.cell_count(); ++c) out[model.cell_body[c]] += model.cell_moment[c];
+  return out;
+}
+
+std::vector<Vec3> body_moments(const magnetics::Model& model, const std::vector<Vec3>& permanent,
+                               const std::vector<int>& induced_order, const io::CacheFrame& fr) {
+  std::vector<Vec3> out(model.body_count);
+  for (int b = 0; b < model.body_count; ++b) out[b] = fr.orientation[b].normalized() * permanent[b];
+  for (std::size_t k = 0; k < model.induced_cells.size(); ++k) {
+    out[model.cell_body[model.induced_cells[k]]] += fr.induced_moment.at(induced_order.at(k));
+  }
+  return out;
+}
+
 magnetics::Box3 shot_box(const ShotGeometry& geo, const std::vector<io::CacheFrame>& frames) {
   magnetics::Box3 box;
   for (const io::CacheFrame& fr : frames) {

@@ -21,6 +21,15 @@ render::Vec3f field_line_color(double b);
 void place_frame(const magnetics::Model& model, const std::vector<magnetics::Vec3>& coms,
                  const std::vector<int>& induced_order, const io::CacheFrame& fr, magnetics::State& st);
 
+/// Each body's permanent moment, the sum of its permanent cells' moments (body frame, A·m²).
+std::vector<magnetics::Vec3> body_permanent_moments(const magnetics::Model& model);
+
+/// Each body's total magnetic moment at frame `fr` of a cache (world, A·m²): its permanent moment
+/// (body_permanent_moments) turned with it plus the stored induced moments of its cells
+/// (induced_order from CacheReader::model).
+std::vector<magnetics::Vec3> body_moments(const magnetics::Model& model, const std::vector<magnetics::Vec3>& permanent,
+                                          const std::vector<int>& induced_order, const io::CacheFrame& fr);
+
 /// The box every body's render mesh sweeps over `frames` (world, m).
 magnetics::Box3 shot_box(const ShotGeometry& geo, const std::vector<io::CacheFrame>& frames);
 

@@ -86,11 +86,6 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
   const std::size_t n = names.size();
   std::vector<int> induced_order;
   const magnetics::Model model = cache->model(&induced_order);
-  // Permanent moment of each body in its frame (A·m²), and which body each induced cell is on.
-  std::vector<Vec3> permanent(n, Vec3::Zero());
-  for (int c = 0; c < model.cell_count(); ++c) {
-    if (model.cell_body[c] >= 0 && static_cast<std::size_t>(model.cell_body[c]) < n) permanent[model.cell_body[c]] += model.cell_moment[c];
-  }
   const bool magnetic_any = model.cell_count() > 0;
 
   std::vector<io::CacheFrame> frames;
@@ -116,6 +111,12 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
     for (const io::CacheFrame& fr : frames) at.samples.emplace_back(double(fr.frame), value_at(fr));
     return at;
   };
+  // Each body's total moment per frame (world): permanent cells turned with it plus induced.
+  std::vector<std::vector<Vec3>> moments;
+  if (magnetic_any) {
+    const std::vector<Vec3> permanent = body_permanent_moments(model);
+    for (const io::CacheFrame& fr : frames) moments.push_back(body_moments(model, permanent, induced_order, fr));
+  }
   std::set<std::string> body_used;
   for (std::size_t i = 0; i < n; ++i) {
     const std::string prim = prim_name(names[i], body_used);
@@ -141,15 +142,9 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
     if (magnetic_any) {
       // Total magnetic moment, world frame: the permanent cells turned with the body plus the
       // induced moments of its cells.
-      body.attributes.push_back(sampled("magbake:magneticMoment", "double3", true, [&](const io::CacheFrame& fr) {
-        Vec3 m = fr.orientation[i].normalized() * permanent[i];
-        for (std::size_t k = 0; k < model.induced_cells.size() && k < induced_order.size(); ++k) {
-          const int c = model.induced_cells[k];
-          const std::size_t r = static_cast<std::size_t>(induced_order[k]);
-          if (static_cast<std::size_t>(model.cell_body[c]) == i && r < fr.induced_moment.size()) m += fr.induced_moment[r];
-        }
-        return usd::Value(v3(m));
-      }));
+      usd::Attribute moment{"magbake:magneticMoment", "double3", true};
+      for (std::size_t k = 0; k < frames.size(); ++k) moment.samples.emplace_back(double(frames[k].frame), usd::Value(v3(moments[k][i])));
+      body.attributes.push_back(std::move(moment));
     }
     // Render meshes (as the previews draw them), body frame, one colour per triangle.
     // A body of one mesh names it after itself (Blender's import merges such an Xform and its

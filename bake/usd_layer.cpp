@@ -7,7 +7,6 @@
 #include <cstring>
 #include <map>
 #include <sstream>
-#include <stdexcept>
 
 namespace magbake::usd {
 namespace {
