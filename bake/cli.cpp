@@ -54,7 +54,9 @@ std::string scene_summary(const scene::Scene& s, bool all_bodies) {
                 "(tolerance %g), applied field %g %g %g T\n",
                 m.quality.c_str(),
                 m.cell_size ? (std::to_string(*m.cell_size * 1e3) + " mm").c_str()
-                            : ("extent/" + std::to_string(m.cells_per_extent)).c_str(),
+                            : ("extent/" + std::to_string(m.cells_per_extent) + " (soft parts extent/" +
+                               std::to_string(m.soft_cells_per_extent) + ")")
+                                  .c_str(),
                 m.theta, m.near_field, m.near_field_order, m.induction.c_str(), m.induction_tolerance, m.external_field[0],
                 m.external_field[1], m.external_field[2]);
   os << buf;

@@ -263,7 +263,10 @@ scene::Scene with_knobs(const scene::Scene& base, const Knobs& k) {
   if (cell) {
     mg.cell_size = *cell / k.resolution;
   } else {
-    mg.cells_per_extent = static_cast<int>(std::lround(mg.cells_per_extent * k.resolution));
+    // Soft parts scale with the rest (the preset has replaced a scene's soft_cells_across pin:
+    // the error columns measure the presets as users get them).
+    mg.cells_per_extent = std::max(1, static_cast<int>(std::lround(mg.cells_per_extent * k.resolution)));
+    mg.soft_cells_per_extent = std::max(1, static_cast<int>(std::lround(mg.soft_cells_per_extent * k.resolution)));
   }
   if (k.theta) mg.theta = *k.theta;
   if (k.near_field) mg.near_field = *k.near_field;

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """A soft ball next to a ball magnet: magbake eval's force on the ball at draft, default, default
-with grading 1 and high, against the exact Legendre series (tests/data/soft_sphere_series.json,
+with 4 cells across soft parts (the paper scenes' resolution) and high, against the exact Legendre series (tests/data/soft_sphere_series.json,
 scripts/make_soft_sphere_series.py), with each evaluation's wall time (one process per case,
 including loading the scene and building the cells).
 
@@ -18,7 +18,7 @@ build = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "build")
 out = sys.argv[2] if len(sys.argv) > 2 else os.path.join(here, "bench/results/soft_series")
 exe = os.path.join(build, "bake/magbake")
 ref = json.load(open(os.path.join(here, "tests/data/soft_sphere_series.json")))
-presets = [("draft", ""), ("default", ""), ("default+grading1", ", grading: 1"), ("high", "")]
+presets = [("draft", ""), ("default", ""), ("default+soft4", ", soft_cells_across: 4"), ("high", "")]
 os.makedirs(out, exist_ok=True)
 cpu = next(l.split(":")[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name"))
 lines = ["# Soft ball next to a ball magnet against the exact series", "",

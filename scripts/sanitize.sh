@@ -11,6 +11,11 @@
 # Usd.BlenderImportsTheStageAndRendersIt is in $slow as well: it exercises the same instrumented
 # export as Usd.ExportOpensInUsdCoreAndMatchesTheCache and would install Blender (bpy, 1 GB) a
 # second time under the sanitizer build.
+# So are the soft-material accuracy sweeps (SoftReference.CubeMomentAndSphereForceAtEveryPreset,
+# SoftSphereSeries.ForceOnASoftBallNextToABallMagnetAtEveryPreset): 27 and 16 models up to 2744
+# soft cells at the high preset, numbers against references; the same code runs instrumented in
+# Induction.*, Cells.*, Scene.SoftPartsGetTheirOwnCellsAcross and
+# SoftSphereSeries.FarSoftBallIsNotOneDipoleInTheBodyWalk (a 1633-cell graded ball).
 # Bake.SameCacheOnEmulatedIntelAndAmdCpus never runs here: it runs the binary under qemu-user,
 # and an instrumented binary's shadow memory and run time there test qemu, not magbake (the
 # normal build runs it).
@@ -18,7 +23,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build-asan}
 all=${2:-}
-slow='^(Contact\.SnappedCubesStayTogetherAndGainNoEnergy|Bake\.KillNineLeavesAReadableCacheWithEveryCompletedFrame|Bake\.SameCacheOnEmulatedIntelAndAmdCpus|Farm\.Slurm_.*|Usd\.BlenderImportsTheStageAndRendersIt)$'
+slow='^(SoftReference\.CubeMomentAndSphereForceAtEveryPreset|SoftSphereSeries\.ForceOnASoftBallNextToABallMagnetAtEveryPreset|Contact\.SnappedCubesStayTogetherAndGainNoEnergy|Bake\.KillNineLeavesAReadableCacheWithEveryCompletedFrame|Bake\.SameCacheOnEmulatedIntelAndAmdCpus|Farm\.Slurm_.*|Usd\.BlenderImportsTheStageAndRendersIt)$'
 never='^Bake\.SameCacheOnEmulatedIntelAndAmdCpus$'
 if [ ! -f "$build/build.ninja" ]; then
   cmake -S . -B "$build" -G Ninja -DMAGBAKE_SANITIZE=ON -DMAGBAKE_BUILD_BENCH=OFF >/dev/null

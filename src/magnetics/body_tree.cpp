@@ -136,6 +136,7 @@ void BodyTreeSources::aggregate(const BodyTree& t, const Model& m, const Sources
   active.assign(nn, 0);
   open_radius.assign(nn, 0.0);
   spread.assign(nn, 0.0);
+  induced.assign(nn, 0);
   std::vector<double> abs_sum(nn, 0.0), spread_sum(nn, 0.0);  // sum |m_k|, sum q_k |m_k|
   // Children are created after their parents: a reverse sweep sums bottom-up.
   for (int n = nn - 1; n >= 0; --n) {
@@ -145,6 +146,7 @@ void BodyTreeSources::aggregate(const BodyTree& t, const Model& m, const Sources
       active[n] = src.node_active[root];
       abs_sum[n] = moment[n].norm();
       open_radius[n] = t.radius[n];
+      induced[n] = m.body_induced.empty() ? 0 : m.body_induced[t.body[n]];
       spread[n] = src.spread.empty() ? 0.0 : src.spread[root];
       // A body whose moments cancel (infinite spread) makes every group holding it open.
       spread_sum[n] = spread[n] == 0.0 ? 0.0
@@ -154,6 +156,7 @@ void BodyTreeSources::aggregate(const BodyTree& t, const Model& m, const Sources
       const int k = t.child[n];
       moment[n] = moment[k] + moment[k + 1];
       active[n] = active[k] || active[k + 1];
+      induced[n] = induced[k] || induced[k + 1];
       abs_sum[n] = abs_sum[k] + abs_sum[k + 1];
       const double net = moment[n].norm();
       open_radius[n] = net > 0.0 ? t.radius[n] * std::max(1.0, abs_sum[n] / net) : std::numeric_limits<double>::infinity();

@@ -65,6 +65,9 @@ struct BodyTreeSources {
   /// spreads weighted by |their moment| / |the group's moment| (infinite when that vanishes),
   /// a bound on the part of the group's first moment that its open_radius does not cover.
   std::vector<double> spread;
+  /// (nnode) some member has induced cells (Model::body_induced): the force walk then opens the
+  /// node as the cell walk opens soft nodes (forces.cpp, kInducedTheta and kSoftSourceTheta).
+  std::vector<std::uint8_t> induced;
   /// Sums src.node[root] of each body bottom-up.
   void aggregate(const BodyTree& tree, const Model& model, const Sources& src);
 };

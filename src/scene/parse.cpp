@@ -268,7 +268,7 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
   s.gravity = r.vector(c, "gravity", "", 3);
   if (const YAML::Node m = c["magnetics"]; m.IsDefined()) {
     s.magnetics_loc = loc_of(m);
-    if (r.mapping(m, "magnetics", {"quality", "cell_size", "theta", "induction", "induction_tolerance", "surface_tolerance", "grading", "external_field"}, {}, s.magnetics_loc)) {
+    if (r.mapping(m, "magnetics", {"quality", "cell_size", "theta", "induction", "induction_tolerance", "surface_tolerance", "grading", "soft_cells_across", "external_field"}, {}, s.magnetics_loc)) {
       s.quality = r.text(m, "quality", "magnetics");
       s.cell_size = r.number(m, "cell_size", "magnetics");
       s.theta = r.number(m, "theta", "magnetics");
@@ -276,6 +276,7 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
       s.induction_tolerance = r.number(m, "induction_tolerance", "magnetics");
       s.surface_tolerance = r.number(m, "surface_tolerance", "magnetics");
       s.grading = r.number(m, "grading", "magnetics");
+      s.soft_cells_across = r.number(m, "soft_cells_across", "magnetics");
       s.external_field = r.vector(m, "external_field", "magnetics", 3);
     }
   }

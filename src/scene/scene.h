@@ -91,6 +91,10 @@ struct MagneticsSettings {
   std::string quality = "default";   ///< draft | default | high
   std::optional<double> cell_size;   ///< m; when unset each part uses its extent / cells_per_extent
   int cells_per_extent = 4;          ///< preset: cells across the smallest extent of each part
+  /// Preset or `soft_cells_across`: the same for soft parts (induced, chi >= kSoftPartChi), whose
+  /// magnetization gathers at edges and contact points and needs finer cells than a magnet's
+  /// uniform one (physics.md §7).
+  int soft_cells_per_extent = 8;
   double theta = 0.5;
   std::string induction = "coupled";  ///< coupled | paper | off
   /// Coupled induction: GMRES stops when the residual is below this fraction of the right-hand

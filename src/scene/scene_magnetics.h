@@ -18,9 +18,17 @@ bool apply_quality_preset(const std::string& quality, MagneticsSettings& mg);
 /// Library settings from the scene (presets already resolved in the Scene).
 magnetics::Settings magnetics_settings(const Scene& scene);
 
-/// Cell size a part gets: magnetics.cell_size if set, else the part's smallest extent divided
-/// by the preset's cells_per_extent. m.
-double part_cell_size(const Scene& scene, const ShapeDesc& shape);
+/// Susceptibility from which an induced material counts as soft (steel, mu-metal): its parts get
+/// MagneticsSettings::soft_cells_per_extent. Weak para- and diamagnets and superconductors
+/// (chi = -1) keep cells_per_extent.
+constexpr double kSoftPartChi = 1.0;
+
+/// Whether parts of this material are soft (kLinear with chi >= kSoftPartChi).
+bool soft_part(const Material& material);
+
+/// Cell size a part of this material gets: magnetics.cell_size if set, else the part's smallest
+/// extent divided by the preset's cells_per_extent (soft_cells_per_extent for soft parts). m.
+double part_cell_size(const Scene& scene, const ShapeDesc& shape, const Material& material);
 
 /// Builds the magnetics model of a scene (throws std::runtime_error on capacity limits).
 magnetics::Model build_magnetics_model(const Scene& scene);

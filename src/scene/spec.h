@@ -99,7 +99,7 @@ struct SceneSpec {
   Val<Vec> gravity;
   Loc magnetics_loc;
   Val<std::string> quality, induction;
-  Val<double> cell_size, theta, induction_tolerance, surface_tolerance, grading;
+  Val<double> cell_size, theta, induction_tolerance, surface_tolerance, grading, soft_cells_across;
   Val<Vec> external_field;
   std::vector<MaterialSpecS> materials;
   std::vector<BodySpecS> bodies;

@@ -484,6 +484,14 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       mg.grading = static_cast<int>(s.grading.v);
     }
   }
+  if (s.soft_cells_across.set) {
+    const double v = s.soft_cells_across.v;
+    if (!(v >= 1 && v <= 64 && v == std::floor(v))) {
+      d.add(s.soft_cells_across.loc, "magnetics.soft_cells_across", "must be a whole number from 1 to 64 (cells across a soft part's smallest extent)");
+    } else {
+      mg.soft_cells_per_extent = static_cast<int>(v);
+    }
+  }
   if (s.external_field.set && within(c, s.external_field, "magnetics.external_field", kMaxFieldTesla, 1, "T")) {
     mg.external_field = vec3(s.external_field);
   }

@@ -172,6 +172,9 @@ TEST_F(Hostile, NumbersThatOverflowAreErrorsAtTheirKey) {
       {"quality: draft,", "quality: draft, surface_tolerance: -1,", "magnetics.surface_tolerance"},
       {"quality: draft,", "quality: draft, grading: 4,", "magnetics.grading"},
       {"quality: draft,", "quality: draft, grading: 0.5,", "magnetics.grading"},
+      {"quality: draft,", "quality: draft, soft_cells_across: 0,", "magnetics.soft_cells_across"},
+      {"quality: draft,", "quality: draft, soft_cells_across: 6.5,", "magnetics.soft_cells_across"},
+      {"quality: draft,", "quality: draft, soft_cells_across: 1e9,", "magnetics.soft_cells_across"},
   };
   for (const Case& c : cases) {
     const fs::path s = scene("n.yaml", with(kScene, c.from, c.to));

@@ -80,7 +80,7 @@ TEST(EvalCommand, SoftSphereInFieldHasTheExactMoment) {
   const double exact = 4 * std::acos(-1.0) * R * R * R * 700.0 / 703.0 * 0.01 / (4e-7 * std::acos(-1.0));
   EXPECT_NEAR(vec(j["bodies"][0]["moment"])[2], exact, 0.01 * exact);
   EXPECT_GT(j["induction"]["iterations"].get<int>(), 0);
-  EXPECT_LT(j["induction"]["residual"].get<double>(), 1e-6);
+  EXPECT_LT(j["induction"]["residual"].get<double>(), 1e-4);  // the default preset's induction tolerance
 }
 
 TEST(EvalAndProbe, DipolePairMatchesPointDipoles) {
@@ -196,7 +196,7 @@ TEST(Commands, CheckJsonEstimatesTheBake) {
   ASSERT_EQ(c.code, 0) << c.out;
   const auto j = nlohmann::json::parse(c.out);
   EXPECT_EQ(j["name"], "toy_magnet_and_sphere");
-  EXPECT_EQ(j["cells"], 320);
+  EXPECT_EQ(j["cells"], 664);  // the magnet's two inserts 2 x 128, the steel sphere 408 (8 across a soft part)
   const auto& e = j["estimate"];
   EXPECT_EQ(e["nominal_steps"], 5963);
   EXPECT_EQ(e["trial_steps"], 5963);  // the whole shot: counts are then the bake's own

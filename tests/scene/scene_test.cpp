@@ -93,6 +93,34 @@ TEST(Scene, CellsLiveInTheCentreOfMassFrame) {
   EXPECT_GT(s.bodies[0].com.norm(), 1e-3);
 }
 
+// Cells across each part's smallest extent: 4 for magnets and weak materials, 8 for soft parts
+// at the default preset (14 at high, 2 at draft), `soft_cells_across` for soft parts alone, and
+// `cell_size` over both. Cubes, so the counts are n^3.
+TEST(Scene, SoftPartsGetTheirOwnCellsAcross) {
+  auto cells = [](const std::string& magnetics) {
+    const Scene s = load_scene_text(
+        "magbake: 1\nunits: {length: mm, angle: deg}\nmagnetics: {" + magnetics + "}\n"
+        "materials: {N42: {kind: permanent, remanence: 1.3, density: 7500}, steel: {kind: soft, chi: 700, density: 7850},"
+        " alu: {kind: linear, chi: 2.2e-5, density: 2700}, ybco: {kind: superconductor, density: 6300}}\n"
+        "bodies:\n"
+        "  - {name: magnet, shape: {box: [10, 10, 10]}, material: N42, magnetization: [0, 0, 1]}\n"
+        "  - {name: steel, shape: {box: [10, 10, 10]}, material: steel, position: [30, 0, 0]}\n"
+        "  - {name: alu, shape: {box: [10, 10, 10]}, material: alu, position: [60, 0, 0]}\n"
+        "  - {name: ybco, shape: {box: [10, 10, 10]}, material: ybco, position: [90, 0, 0]}\n",
+        source_dir() + "/scenes/x.yaml");
+    const magnetics::Model m = build_magnetics_model(s);
+    std::vector<int> n;
+    for (int b = 0; b < 4; ++b) n.push_back(m.body_cell_begin[b + 1] - m.body_cell_begin[b]);
+    return n;
+  };
+  EXPECT_EQ(cells("quality: default"), (std::vector<int>{64, 512, 64, 64}));
+  EXPECT_EQ(cells("quality: draft"), (std::vector<int>{8, 8, 8, 8}));
+  EXPECT_EQ(cells("quality: high"), (std::vector<int>{512, 2744, 512, 512}));
+  EXPECT_EQ(cells("quality: default, soft_cells_across: 4"), (std::vector<int>{64, 64, 64, 64}));
+  EXPECT_EQ(cells("soft_cells_across: 5, quality: default"), (std::vector<int>{64, 125, 64, 64}));  // key order is free
+  EXPECT_EQ(cells("cell_size: 5, soft_cells_across: 6"), (std::vector<int>{8, 8, 8, 8}));
+}
+
 TEST(Scene, SoftSpheresFeelNoMagneticTorque) {
   // A soft sphere's energy does not change as it turns, so its exact torque is zero; the cell
   // model's staircase (one cube at this cell size) gives a spurious one, which spun the balls of
