@@ -26,11 +26,7 @@ for row in "tst|1-30" "bowl_spheres|1-15" "bowl_2008|1-15" "supercube|1-15" "dra
   for r in $(seq "$repeat"); do
     for v in old new; do
       exe=$old; [ $v = new ] && exe=$new
-      rm -rf "$work/out_$v"
-      t0=$(date +%s.%N)
-      "$exe" -q --threads 1 bake "$work/${v}_$name.yaml" --frames "$frames" -o "$work/out_$v" >/dev/null 2>&1
-      t1=$(date +%s.%N)
-      t[$v]+="$(echo "$t1 - $t0" | bc) "
+      t[$v]+="$(timed_bake "$exe" "$work/${v}_$name.yaml" "$frames" "$work/out_$v") "
     done
   done
   # magbake diff exits 1 when the caches differ; its first line after the notes says how.

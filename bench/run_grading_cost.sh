@@ -29,24 +29,11 @@ for row in "${rows[@]}"; do
   declare -A t=()
   for r in $(seq "$repeat"); do
     for g in 0 1; do
-      rm -rf "$work/out_$g"
-      t0=$(date +%s.%N)
-      "$exe" -q --threads 1 bake "$work/${name}_$g.yaml" --frames "$frames" -o "$work/out_$g" >/dev/null
-      t1=$(date +%s.%N)
-      t[$g]+="$(echo "$t1 - $t0" | bc) "
+      t[$g]+="$(timed_bake "$exe" "$work/${name}_$g.yaml" "$frames" "$work/out_$g") "
     done
   done
   its=()
-  for g in 0 1; do
-    its+=("$(/usr/bin/python3 - "$work/out_$g" <<'P'
-import glob, sys, h5py
-f = h5py.File(glob.glob(sys.argv[1] + "/*.h5")[0], "r")
-found = []
-f.visit(lambda n: found.append(n) if n.endswith("induction_iterations/value") else None)
-print("%.1f" % f[found[0]][()].mean() if found else "?")
-P
-)")
-  done
+  for g in 0 1; do its+=("$(cache_mean "$work/out_$g" induction_iterations)"); done
   a=$(echo "${t[0]}" | median) b=$(echo "${t[1]}" | median)
   echo "| $name | $preset | $frames | $a | $b | $(echo "scale=2; $b / $a" | bc) | ${its[0]} / ${its[1]} |"
 done

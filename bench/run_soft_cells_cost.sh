@@ -31,24 +31,13 @@ for row in "${rows[@]}"; do
   declare -A t=()
   for r in $(seq "$repeat"); do
     for k in 4 8; do
-      rm -rf "$work/out_$k"
-      t0=$(date +%s.%N)
-      "$exe" -q --threads 1 bake "$work/${name}_$k.yaml" --frames "$frames" -o "$work/out_$k" >/dev/null 2>&1
-      t1=$(date +%s.%N)
-      t[$k]+="$(echo "$t1 - $t0" | bc) "
+      t[$k]+="$(timed_bake "$exe" "$work/${name}_$k.yaml" "$frames" "$work/out_$k") "
     done
   done
   its=() cells=()
   for k in 4 8; do
     cells+=("$("$exe" check "$work/${name}_$k.yaml" --trial 0 | sed -n 's/^cells .*(total \([0-9]*\)).*/\1/p')")
-    its+=("$(/usr/bin/python3 - "$work/out_$k" <<'P'
-import glob, sys, h5py
-f = h5py.File(glob.glob(sys.argv[1] + "/*.h5")[0], "r")
-found = []
-f.visit(lambda n: found.append(n) if n.endswith("induction_iterations/value") else None)
-print("%.1f" % f[found[0]][()].mean() if found else "?")
-P
-)")
+    its+=("$(cache_mean "$work/out_$k" induction_iterations)")
   done
   a=$(echo "${t[4]}" | median) b=$(echo "${t[8]}" | median)
   echo "| $name | $frames | $a | $b | $(echo "scale=2; $b / $a" | bc) | ${cells[0]} / ${cells[1]} | ${its[0]} / ${its[1]} |"
