@@ -89,4 +89,71 @@ std::string scene_summary(const scene::Scene& s, bool all_bodies) {
   return os.str();
 }
 
+nlohmann::json scene_summary_json(const scene::Scene& s) {
+  using nlohmann::json;
+  json j;
+  j["scene"] = s.file;
+  j["name"] = s.name;
+  j["sha256"] = s.hash;
+  j["units"] = {{"length", s.length_unit}, {"angle", s.angle_unit}};
+  const int frames = s.last_frame - s.first_frame + 1;
+  j["time"] = {{"fps", s.fps},
+               {"frames", {s.first_frame, s.last_frame}},
+               {"frame_count", frames},
+               {"duration_seconds", (s.last_frame - s.first_frame) / s.fps},
+               {"dt_seconds", s.dt},
+               {"substeps", static_cast<long long>(s.steps_per_frame()) * (frames - 1)},
+               {"sleep_seconds", s.sleep_time}};
+  j["gravity"] = json_vec(s.gravity);
+  const auto& m = s.magnetics;
+  json mg = {{"quality", m.quality},
+             {"theta", m.theta},
+             {"near_field_cells", m.near_field},
+             {"near_field_order", m.near_field_order},
+             {"induction", m.induction},
+             {"induction_tolerance", m.induction_tolerance},
+             {"external_field_T", json_vec(m.external_field)}};
+  if (m.cell_size) {
+    mg["cell_size_m"] = *m.cell_size;
+  } else {
+    mg["cells_across"] = m.cells_per_extent;
+    mg["soft_cells_across"] = m.soft_cells_per_extent;
+  }
+  j["magnetics"] = mg;
+  auto damping = [](double linear, double angular) { return json{{"linear", linear}, {"angular", angular}}; };
+  j["materials"] = json::array();
+  for (const auto& mt : s.materials) {
+    json o = {{"name", mt.name}, {"kind", mt.kind_name}};
+    if (mt.kind == magnetics::MaterialKind::kPermanent) o["remanence_T"] = mt.remanence;
+    if (mt.kind == magnetics::MaterialKind::kLinear || mt.kind == magnetics::MaterialKind::kSuperconductor) o["chi"] = mt.chi;
+    if (mt.density) o["density"] = *mt.density;
+    if (mt.friction) o["friction"] = *mt.friction;
+    if (mt.restitution) o["restitution"] = *mt.restitution;
+    if (mt.linear_damping || mt.angular_damping) {
+      o["damping"] = damping(mt.linear_damping.value_or(0), mt.angular_damping.value_or(0));
+    }
+    if (mt.color) o["color"] = json_vec(*mt.color);
+    j["materials"].push_back(o);
+  }
+  j["bodies"] = json::array();
+  for (const scene::Body& b : s.bodies) {
+    json o = {{"name", b.name},
+              {"shape", b.shape.describe()},
+              {"material", b.material >= 0 ? json(s.materials[b.material].name) : json(nullptr)},
+              {"parts", b.parts.size()},
+              {"motion", motion_name(b.motion)},
+              {"mass_kg", b.mass},
+              {"friction", b.friction},
+              {"restitution", b.restitution},
+              {"damping", damping(b.linear_damping, b.angular_damping)}};
+    if (b.color) o["color"] = json_vec(*b.color);
+    j["bodies"].push_back(o);
+  }
+  json out = {{"cache", s.cache ? json(*s.cache) : json(nullptr)}, {"usd", s.usd ? json(*s.usd) : json(nullptr)}};
+  out["field"] = s.field ? json(s.field->path) : json(nullptr);
+  out["preview"] = s.preview ? json(s.preview->path) : json(nullptr);
+  j["outputs"] = out;
+  return j;
+}
+
 }  // namespace magbake::cli

@@ -39,6 +39,15 @@ inline constexpr std::size_t kSummaryBodies = 24;
 /// every body even in a large scene.
 std::string scene_summary(const scene::Scene& s, bool all_bodies = false);
 
+/// The same summary as JSON (`check --json`): scene, name, sha256, units, time {fps, frames,
+/// frame_count, duration_seconds, dt_seconds, substeps}, gravity (m/s²), magnetics {quality,
+/// cell_size_m or cells_across and soft_cells_across, theta, near_field_cells, near_field_order,
+/// induction, induction_tolerance, external_field_T}, materials [{name, kind, remanence_T, chi,
+/// density, friction, restitution, damping, color}] (keys present where set), bodies [{name,
+/// shape, material, parts, motion, mass_kg, friction, restitution, damping {linear, angular},
+/// color}] (every body), outputs {cache, usd, field, preview}. SI throughout.
+nlohmann::json scene_summary_json(const scene::Scene& s);
+
 /// `check`: validates, prints the summary and the expected cost of a bake (from a trial bake of
 /// `trial_seconds` of wall time at most; 0 = evaluation cost only); `json` for the stable form.
 int cmd_check(const std::string& path, double trial_seconds, bool json, const Global& g);

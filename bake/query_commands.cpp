@@ -94,10 +94,12 @@ int cmd_check(const std::string& path, double trial_seconds, bool json, const Gl
     const sim::CostEstimate est =
         sim::estimate_cost(*s, e.model, trial_seconds, trial_seconds > 0 ? std::numeric_limits<int>::max() : 0);
     if (json) {
-      nlohmann::json out;
+      nlohmann::json out = scene_summary_json(*s);
       out["scene"] = path;
-      out["name"] = s->name;
       out["cells"] = e.model.cell_count();
+      for (int b = 0; b < e.model.body_count; ++b) {
+        out["bodies"][b]["cells"] = e.model.body_cell_begin[b + 1] - e.model.body_cell_begin[b];
+      }
       out["evaluation_seconds"] = per;
       out["estimate"] = {{"nominal_steps", est.nominal_steps},
                          {"trial_steps", est.trial_steps},

@@ -37,14 +37,18 @@ ShotGeometry load_geometry(const io::CacheReader& cache) {
     centre /= double(std::max<std::int64_t>(sub.vertex_count, 1));
     const Vec3 dir = sub.magnetization;
     const std::string& kind = sub.material_kind;
+    // The scene's colour (sRGB as picked) drawn in the renderer's linear RGB; a magnet with a
+    // colour is drawn in it whole.
+    std::optional<Vec3f> own;
+    if (sub.color) own = sub.color->array().pow(2.2).cast<float>().matrix();
     auto emit = [&](const Vec3& a, const Vec3& b, const Vec3& c, bool north) {
-      const Vec3f col = material_color(kind, north);
+      const Vec3f col = own ? *own : material_color(kind, north);
       for (const Vec3& p : {a, b, c}) m.positions.push_back(p.cast<float>()), m.colors.push_back(col);
     };
     for (std::int64_t t = sub.triangle_begin; t < sub.triangle_begin + sub.triangle_count; ++t) {
       const auto& tri = geo.triangles[t];
       const Vec3 p[3] = {vertex(tri[0]), vertex(tri[1]), vertex(tri[2])};
-      if (kind != "permanent") {
+      if (kind != "permanent" || own) {
         emit(p[0], p[1], p[2], true);
         continue;
       }

@@ -1,7 +1,7 @@
 // The render meshes of a cache's bodies as previews and USD export draw them: every body's and
 // part's triangles in the body frame, coloured by material, permanent magnets split into a north
 // (red) and a south (blue) half across the plane through their centre normal to their
-// magnetization.
+// magnetization; a body or part with a scene `color` is drawn in it.
 #pragma once
 
 #include <string>

@@ -183,8 +183,10 @@ CacheWriter::CacheWriter(const std::string& path, const scene::Scene& sc, const 
       verts.reserve(3 * nv), tris.reserve(3 * nt), magnetization.reserve(3 * nsub);
       for (auto* v : {&body, &vbegin, &vcount, &tbegin, &tcount}) v->reserve(nsub);
     }
+    std::vector<double> color;  // -1 -1 -1: none given
+    color.reserve(3 * body.capacity());
     auto add = [&](int bi, const scene::ShapeDesc& shape, const magnetics::Pose& pose, int mat, const Vec3& mag,
-                   const char* r) {
+                   const char* r, const std::optional<Vec3>& col) {
       const geometry::Tessellation& t = tessellation(shape);
       const std::int64_t v0 = static_cast<std::int64_t>(verts.size() / 3);
       body.push_back(bi);
@@ -200,11 +202,16 @@ CacheWriter::CacheWriter(const std::string& path, const scene::Scene& sc, const 
       role.push_back(r);
       kind.push_back(mat >= 0 ? sc.materials[mat].kind_name : "none");
       magnetization.insert(magnetization.end(), {mag[0], mag[1], mag[2]});
+      const Vec3 c = col.value_or(Vec3::Constant(-1));
+      color.insert(color.end(), {c[0], c[1], c[2]});
     };
     for (std::size_t i = 0; i < n; ++i) {
       const auto& b = sc.bodies[i];
-      add(int(i), b.shape, magnetics::Pose{}, b.material, b.magnetization, "body");
-      for (const auto& p : b.parts) add(int(i), p.shape, p.pose, p.material, p.magnetization, "part");
+      add(int(i), b.shape, magnetics::Pose{}, b.material, b.magnetization, "body", b.color);
+      for (const auto& p : b.parts) {
+        add(int(i), p.shape, p.pose, p.material, p.magnetization, "part",
+            p.material >= 0 ? sc.materials[p.material].color : std::nullopt);
+      }
     }
     const hsize_t ns = body.size();
     h5::write_doubles(g.id(), "vertices", {verts.size() / 3, 3}, verts.data(), "m");
@@ -217,6 +224,7 @@ CacheWriter::CacheWriter(const std::string& path, const scene::Scene& sc, const 
     h5::write_strings(g.id(), "submesh_role", role);
     h5::write_strings(g.id(), "submesh_material_kind", kind);
     h5::write_doubles(g.id(), "submesh_magnetization", {ns, 3}, magnetization.data());
+    h5::write_doubles(g.id(), "submesh_color", {ns, 3}, color.data());
   }
 
   // The magnetic model's cells (body frame) so field export runs from the cache alone.
@@ -634,9 +642,12 @@ RenderGeometry CacheReader::geometry() const {
   const auto role = h5::read_strings(f, "geometry/submesh_role");
   const auto kind = h5::read_strings(f, "geometry/submesh_material_kind");
   const auto mag = h5::read_doubles(f, "geometry/submesh_magnetization");
+  const auto col = h5::exists(f, "geometry/submesh_color") ? h5::read_doubles(f, "geometry/submesh_color")
+                                                           : std::vector<double>();
   for (std::size_t s = 0; s < body.size(); ++s) {
     g.submeshes.push_back(RenderGeometry::Submesh{static_cast<int>(body[s]), vb[s], vc[s], tb[s], tc[s], role[s], kind[s],
-                                                  Vec3(mag[3 * s], mag[3 * s + 1], mag[3 * s + 2])});
+                                                  Vec3(mag[3 * s], mag[3 * s + 1], mag[3 * s + 2]), std::nullopt});
+    if (!col.empty() && col[3 * s] >= 0) g.submeshes.back().color = Vec3(col[3 * s], col[3 * s + 1], col[3 * s + 2]);
   }
   return g;
 }

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -94,6 +95,9 @@ struct RenderGeometry {
     std::string role;                      ///< "body" or "part"
     std::string material_kind;             ///< permanent | soft | linear | superconductor | none
     Vec3 magnetization = Vec3::Zero();     ///< unit direction (permanent), body frame
+    /// The scene's `color` (RGB 0..1, sRGB as picked; scene 1.1) for this body or part, unset
+    /// where the scene gave none (drawn by material kind) and in caches written before it.
+    std::optional<Vec3> color;
   };
   std::vector<Vec3> vertices;
   std::vector<std::array<std::int64_t, 3>> triangles;

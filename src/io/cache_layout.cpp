@@ -199,6 +199,17 @@ CacheLayout check_cache_layout(hid_t f, std::int64_t frames_done) {
     (void)h5::read_strings(f, std::string("geometry/") + name);
   }
   doubles(f, "geometry/submesh_magnetization", {ns, 3});
+  if (h5::exists(f, "geometry/submesh_color")) {  // optional: caches before scene format 1.1 lack it
+    const auto c = doubles(f, "geometry/submesh_color", {ns, 3});
+    for (hsize_t s = 0; s < ns; ++s) {
+      const bool none = c[3 * s] == -1 && c[3 * s + 1] == -1 && c[3 * s + 2] == -1;
+      for (int k = 0; k < 3 && !none; ++k) {
+        if (!(c[3 * s + k] >= 0 && c[3 * s + k] <= 1)) {
+          fail("/geometry/submesh_color[" + std::to_string(s) + "] is neither an RGB colour in [0, 1] nor -1 -1 -1 (none)");
+        }
+      }
+    }
+  }
 
   // Per-frame series: the readable frames are those every series holds.
   std::int64_t frames = std::max<std::int64_t>(frames_done, 0);

@@ -226,6 +226,18 @@ void read_orientation(Reader& r, const YAML::Node& map, const std::string& path,
   }
 }
 
+// `damping: {linear: d, angular: d}` on a body or material (format 1.1).
+void read_damping(Reader& r, const YAML::Node& map, const std::string& path, DampingSpec& out) {
+  const YAML::Node n = map["damping"];
+  if (!n.IsDefined()) return;
+  const std::string kp = Reader::join(path, "damping");
+  out.set = true;
+  out.loc = loc_of(n);
+  if (!r.mapping(n, kp, {"linear", "angular"}, {}, out.loc)) return;
+  out.linear = r.number(n, "linear", kp);
+  out.angular = r.number(n, "angular", kp);
+}
+
 }  // namespace
 
 SceneSpec parse_scene_text(const std::string& text, const std::string& file, Diagnostics& d) {
@@ -289,11 +301,18 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
       m.loc = loc_of(kv.first);
       const std::string kp = "materials." + m.name;
       const YAML::Node& v = kv.second;
-      if (!r.mapping(v, kp, {"kind", "remanence", "chi", "density"}, {"kind"}, m.loc)) continue;
+      if (!r.mapping(v, kp, {"kind", "remanence", "chi", "density", "friction", "restitution", "damping", "color"},
+                     {"kind"}, m.loc)) {
+        continue;
+      }
       m.kind = r.text(v, "kind", kp);
       m.remanence = r.number(v, "remanence", kp);
       m.chi = r.number(v, "chi", kp);
       m.density = r.number(v, "density", kp);
+      m.friction = r.number(v, "friction", kp);
+      m.restitution = r.number(v, "restitution", kp);
+      read_damping(r, v, kp, m.damping);
+      m.color = r.vector(v, "color", kp, 3);
       s.materials.push_back(m);
     }
   }
@@ -308,7 +327,8 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
         const std::string bp = "bodies[" + std::to_string(i++) + "]";
         if (!r.mapping(bn, bp,
                        {"name", "shape", "material", "magnetization", "parts", "position", "orientation", "density",
-                        "mass", "motion", "keys", "friction", "restitution", "velocity", "angular_velocity"},
+                        "mass", "motion", "keys", "friction", "restitution", "velocity", "angular_velocity",
+                        "damping", "color"},
                        {"name", "shape", "material"}, b.loc)) {
           continue;
         }
@@ -325,6 +345,8 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
         b.restitution = r.number(bn, "restitution", bp);
         b.velocity = r.vector(bn, "velocity", bp, 3);
         b.angular_velocity = r.vector(bn, "angular_velocity", bp, 3);
+        read_damping(r, bn, bp, b.damping);
+        b.color = r.vector(bn, "color", bp, 3);
         if (const YAML::Node parts = bn["parts"]; parts.IsDefined()) {
           if (!parts.IsSequence()) {
             d.add(loc_of(parts), bp + ".parts", "expected a list of parts, got " + show(parts));

@@ -28,6 +28,10 @@ struct Material {
   double remanence = 0;           ///< T (permanent)
   double chi = 0;                 ///< susceptibility (soft, linear; -1 for superconductor)
   std::optional<double> density;  ///< kg/m³
+  /// Format 1.1 defaults for the bodies made of this material (a body's own key wins).
+  std::optional<double> friction, restitution;
+  std::optional<double> linear_damping, angular_damping;  ///< see Body
+  std::optional<Vec3> color;      ///< see Body
 };
 
 /// A solid shape as the scene describes it, with the built geometry.
@@ -72,7 +76,14 @@ struct Body {
   double mass = 0;                    ///< kg (0 for static/kinematic without density)
   Vec3 com = Vec3::Zero();            ///< centre of mass in the body frame, m
   Mat3 inertia = Mat3::Zero();        ///< about the centre of mass, body axes, kg·m²
-  double friction = 0.5, restitution = 0.1;
+  double friction = 0.5, restitution = 0.1;  ///< the body's, else its material's, else these
+  /// Share of the linear / angular velocity lost per second of free motion, in [0, 1): Bullet's
+  /// (and Blender's) damping, v <- v (1 - d)^dt each step; a rate of -ln(1 - d) per second.
+  /// The body's `damping`, else its material's, else 0 (docs/scene-format.md).
+  double linear_damping = 0, angular_damping = 0;
+  /// Display colour, RGB in [0, 1] as a colour picker shows it (sRGB); unset = by material kind
+  /// (previews and USD, docs/previews.md).
+  std::optional<Vec3> color;
   Vec3 velocity = Vec3::Zero();       ///< initial linear velocity of the centre of mass, m/s
   Vec3 angular_velocity = Vec3::Zero();  ///< initial, world, rad/s
 

@@ -54,6 +54,13 @@ struct KeySpec {
   OrientationSpec orientation;
 };
 
+/// `damping: {linear, angular}` (format 1.1), on a body or a material.
+struct DampingSpec {
+  bool set = false;
+  Loc loc;
+  Val<double> linear, angular;
+};
+
 struct BodySpecS {
   Loc loc;
   Val<std::string> name;
@@ -69,6 +76,8 @@ struct BodySpecS {
   Loc keys_loc;
   Val<double> friction, restitution;
   Val<Vec> velocity, angular_velocity;
+  DampingSpec damping;
+  Val<Vec> color;
 };
 
 struct MaterialSpecS {
@@ -76,6 +85,9 @@ struct MaterialSpecS {
   std::string name;
   Val<std::string> kind;
   Val<double> remanence, chi, density;
+  Val<double> friction, restitution;
+  DampingSpec damping;
+  Val<Vec> color;
 };
 
 struct CameraSpec {

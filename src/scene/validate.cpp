@@ -8,6 +8,7 @@
 #include <memory>
 #include <numbers>
 #include <set>
+#include <tuple>
 
 #include "frame_pattern.h"
 #include "output_path.h"
@@ -378,9 +379,10 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
   Ctx c{d, 1, 1, std::filesystem::path(s.file).parent_path()};
 
   // Version and units first: everything else depends on them.
-  if (s.version.set && s.version.v != 1) {
+  if (s.version.set && s.version.v != 1 && s.version.v != 1.1) {
     d.add(s.version.loc, "magbake",
-          "unsupported scene format version " + std::to_string(s.version.v).substr(0, 6) + "; this magbake reads version 1");
+          "unsupported scene format version " + std::to_string(s.version.v).substr(0, 6) +
+              "; this magbake reads versions 1 and 1.1");
   }
   if (s.length_unit.set) {
     sc.length_unit = s.length_unit.v;
@@ -496,6 +498,37 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
     mg.external_field = vec3(s.external_field);
   }
 
+  // Format 1.1 surface and look keys, shared by materials and bodies.
+  auto friction = [&](const Val<double>& v, const std::string& path) -> std::optional<double> {
+    if (v.v >= 0 && v.v <= 100) return v.v;
+    d.add(v.loc, path, "must be in [0, 100]");
+    return std::nullopt;
+  };
+  auto restitution = [&](const Val<double>& v, const std::string& path) -> std::optional<double> {
+    if (v.v >= 0 && v.v <= 1) return v.v;
+    d.add(v.loc, path, "must be in [0, 1]");
+    return std::nullopt;
+  };
+  auto damping = [&](const DampingSpec& ds, const std::string& path, std::optional<double>& linear,
+                     std::optional<double>& angular) {
+    if (!ds.set) return;
+    for (auto [v, out, name] : {std::tuple{&ds.linear, &linear, "linear"}, std::tuple{&ds.angular, &angular, "angular"}}) {
+      if (!v->set) continue;
+      if (v->v >= 0 && v->v < 1) *out = v->v;
+      else d.add(v->loc, path + ".damping." + name, "must be in [0, 1): the share of the velocity lost per second");
+    }
+  };
+  auto color = [&](const Val<Vec>& v, const std::string& path) -> std::optional<Vec3> {
+    if (v.v.size() != 3) return std::nullopt;  // the parser reported it
+    for (double x : v.v) {
+      if (!(x >= 0 && x <= 1)) {
+        d.add(v.loc, path, "expected [r, g, b] with each in [0, 1]");
+        return std::nullopt;
+      }
+    }
+    return Vec3(v.v[0], v.v[1], v.v[2]);
+  };
+
   // Materials.
   std::vector<std::string> material_names;
   for (const MaterialSpecS& ms : s.materials) {
@@ -542,6 +575,10 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
         within(c, ms.density, mp + ".density", kMaxDensity, 1, "kg/m³")) {
       m.density = ms.density.v;
     }
+    if (ms.friction.set) m.friction = friction(ms.friction, mp + ".friction");
+    if (ms.restitution.set) m.restitution = restitution(ms.restitution, mp + ".restitution");
+    damping(ms.damping, mp, m.linear_damping, m.angular_damping);
+    if (ms.color.set) m.color = color(ms.color, mp + ".color");
     material_names.push_back(m.name);
     sc.materials.push_back(m);
   }
@@ -590,13 +627,19 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       else if (bs.motion.v == "kinematic") b.motion = Motion::kKinematic;
       else d.add(bs.motion.loc, bp + ".motion", "expected dynamic, static or kinematic, got '" + bs.motion.v + "'");
     }
-    if (bs.friction.set) {
-      if (!(bs.friction.v >= 0 && bs.friction.v <= 100)) d.add(bs.friction.loc, bp + ".friction", "must be in [0, 100]");
-      else b.friction = bs.friction.v;
-    }
-    if (bs.restitution.set) {
-      if (!(bs.restitution.v >= 0 && bs.restitution.v <= 1)) d.add(bs.restitution.loc, bp + ".restitution", "must be in [0, 1]");
-      else b.restitution = bs.restitution.v;
+    // Surface, damping and colour: the body's key, else its material's, else the defaults.
+    {
+      const Material* m = b.material >= 0 ? &sc.materials[b.material] : nullptr;
+      if (bs.friction.set) b.friction = friction(bs.friction, bp + ".friction").value_or(b.friction);
+      else if (m && m->friction) b.friction = *m->friction;
+      if (bs.restitution.set) b.restitution = restitution(bs.restitution, bp + ".restitution").value_or(b.restitution);
+      else if (m && m->restitution) b.restitution = *m->restitution;
+      std::optional<double> linear, angular;
+      damping(bs.damping, bp, linear, angular);
+      b.linear_damping = linear.value_or(m && m->linear_damping ? *m->linear_damping : 0.0);
+      b.angular_damping = angular.value_or(m && m->angular_damping ? *m->angular_damping : 0.0);
+      if (bs.color.set) b.color = color(bs.color, bp + ".color");
+      else if (m) b.color = m->color;
     }
     if (bs.velocity.set && within(c, bs.velocity, bp + ".velocity", kMaxSpeed, c.L, "m/s")) {
       b.velocity = vec3(bs.velocity, c.L);

@@ -491,8 +491,10 @@ RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>
     btRigidBody::btRigidBodyConstructionInfo ci(dynamic ? b.mass : 0.0, nullptr, shape, inertia);
     ci.m_friction = b.friction;
     ci.m_restitution = b.restitution;
-    ci.m_linearDamping = 0;
-    ci.m_angularDamping = 0;
+    // Damping (scene 1.1): Bullet scales the velocities by (1 - d)^h after each step of h
+    // seconds, before the contacts are solved (btRigidBody::applyDamping).
+    ci.m_linearDamping = b.linear_damping;
+    ci.m_angularDamping = b.angular_damping;
     auto body = std::make_unique<btRigidBody>(ci);
     // Bullet's default implicit gyroscopic update does not carry angular momentum correctly for
     // small, fast-turning bodies (a constant torque on a 6 mm magnet: 25% off after 2 turns,

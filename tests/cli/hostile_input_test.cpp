@@ -447,6 +447,7 @@ TEST_F(Hostile, CachesWithIndicesOutOfRangeOrBadFramesAreRefused) {
       {"geometry/submesh_vertex_begin", 1, -5},  {"geometry/submesh_triangle_count", 0, 4e18},
       {"geometry/triangles", 5, 1e9},            {"geometry/triangles", 0, -1},
       {"geometry/vertices", 0, nan},             {"magnetics/cells/half", 2, 0},
+      {"geometry/submesh_color", 1, 2},          {"geometry/submesh_color", 0, nan},
       {"magnetics/cells/volume", 2, -1},         {"magnetics/cells/position", 0, nan},
       {"magnetics/parts/orientation", 0, 0},     {"frames/step", 2, 1},
       {"frames/step", 1, 1},                     {"bodies/center_of_mass", 0, nan},

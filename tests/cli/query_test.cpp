@@ -206,6 +206,16 @@ TEST(Commands, CheckJsonEstimatesTheBake) {
   EXPECT_LE(e["evaluations"].get<double>(), e["substeps"].get<double>() + 20);
   EXPECT_GT(e["induction_iterations"].get<double>(), 0);
   EXPECT_GT(e["seconds"].get<double>(), 0);
+  // The summary, as JSON: every body with its cells, the time and the magnetics settings.
+  EXPECT_EQ(j["time"]["frame_count"], 90);
+  ASSERT_EQ(j["bodies"].size(), 3u);
+  int cells = 0;
+  for (const auto& b : j["bodies"]) cells += b["cells"].get<int>();
+  EXPECT_EQ(cells, 664);
+  EXPECT_EQ(j["bodies"][1]["name"], "sphere");
+  EXPECT_EQ(j["bodies"][1]["cells"], 408);
+  EXPECT_EQ(j["magnetics"]["soft_cells_across"], 8);
+  EXPECT_EQ(j["bodies"][1]["damping"]["linear"], 0.0);
   const Outcome none = magbake("check " + scene("demo.yaml") + " --json --trial 0");
   ASSERT_EQ(none.code, 0);
   EXPECT_EQ(nlohmann::json::parse(none.out)["estimate"]["trial_steps"], 0);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "png_file.h"
 #include "renderer.h"
@@ -86,6 +87,43 @@ TEST_F(Preview, BodiesAppearWhereTheCameraPutsThem) {
   for (const Eigen::Vector2i& p : {Eigen::Vector2i(3, 3), Eigen::Vector2i(im.w - 4, 3), project({0.011, 0, 0.012}, im.w, im.h)}) {
     EXPECT_TRUE(near_background(im.at(p[0], p[1]))) << p.transpose() << " " << im.at(p[0], p[1]).transpose();
   }
+}
+
+// Scene 1.1 `color`: a body's own colour wins over its material's, which wins over the kind's;
+// a magnet with a colour is drawn in it whole (no red and blue halves). Previews read the colours
+// from the cache, so they need nothing but it.
+TEST_F(Preview, SceneColoursOfBodiesAndMaterialsAreDrawn) {
+  std::ifstream in(src("tests/preview/three_bodies.yaml"));
+  std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto replace = [&](const std::string& from, const std::string& to) {
+    const std::size_t at = yaml.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    yaml.replace(at, from.size(), to);
+  };
+  replace("magbake: 1\n", "magbake: 1.1\n");
+  replace("name: three_bodies", "name: coloured");
+  replace("steel: {kind: soft, chi: 700, density: 7850}", "steel: {kind: soft, chi: 700, density: 7850, color: [0.1, 0.2, 0.9]}");
+  replace("magnetization: [1, 0, 0], motion: static}", "magnetization: [1, 0, 0], motion: static, color: [0.1, 0.8, 0.1]}");
+  const fs::path scene = dir / "coloured.yaml";
+  std::ofstream(scene) << yaml;
+  const Outcome b = sh(exe() + " bake " + scene.string() + " -o " + (dir / "coloured").string() + " --cache-only");
+  ASSERT_EQ(b.code, 0) << b.out;
+  const Outcome r = sh(exe() + " preview " + (dir / "coloured/coloured.h5").string() + " --frames 2-2 -o " +
+                       (dir / "coloured.####.png").string() + " --no-field-lines");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const Image im = load(dir / "coloured.0002.png");
+  auto at = [&](const Eigen::Vector3d& x) {
+    const Eigen::Vector2i p = project(x, im.w, im.h);
+    return im.at(p[0], p[1]);
+  };
+  for (double x : {0.005, -0.005}) {  // both halves of the magnet green
+    const Eigen::Vector3i c = at({x, 0, 0});
+    EXPECT_GT(c[1], c[0] + 60) << x << ": " << c.transpose();
+    EXPECT_GT(c[1], c[2] + 60) << x << ": " << c.transpose();
+  }
+  const Eigen::Vector3i ball = at({0.022, 0, 0}), wood = at({-0.022, 0, 0});
+  EXPECT_GT(ball[2], ball[0] + 60) << ball.transpose();  // the steel material's blue
+  EXPECT_GT(wood[0], wood[2] + 15) << wood.transpose();  // no colour given: wood's warm white
 }
 
 TEST_F(Preview, MaterialColoursAreWhereTheyShouldBe) {

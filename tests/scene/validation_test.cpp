@@ -148,6 +148,76 @@ TEST(SceneValidation, UnsupportedVersion) {
   EXPECT_TRUE(has(problems("magbake: 2\nunits: {length: m, angle: rad}\n"), 1, 10, "unsupported scene format version 2"));
 }
 
+// Format 1.1 is read beside 1; 1.2 is not (yet).
+TEST(SceneValidation, Version11IsReadAndLaterOnesAreNot) {
+  EXPECT_TRUE(problems("magbake: 1.1\nunits: {length: m, angle: rad}\n").empty());
+  EXPECT_TRUE(has(problems("magbake: 1.2\nunits: {length: m, angle: rad}\n"), 1, 10, "reads versions 1 and 1.1"));
+}
+
+// Materials carry friction, restitution, damping and colour (format 1.1); a body's own key wins,
+// key by key (damping's linear and angular separately).
+TEST(SceneValidation, MaterialsCarrySurfaceDampingAndColourThatBodiesOverride) {
+  const Scene s = load_scene_text(
+      "magbake: 1.1\nunits: {length: mm, angle: deg}\n"
+      "materials:\n"
+      "  steel: {kind: soft, chi: 700, density: 7850, friction: 0.4, restitution: 0.2, damping: {linear: 0.05, angular: 0.2},"
+      " color: [0.5, 0.5, 0.6]}\n"
+      "  wood: {kind: none, density: 700}\n"
+      "bodies:\n"
+      "  - {name: a, shape: {sphere: {radius: 2}}, material: steel}\n"
+      "  - {name: b, shape: {sphere: {radius: 2}}, material: steel, friction: 0.9, damping: {angular: 0.7}, color: [1, 0, 0]}\n"
+      "  - {name: c, shape: {sphere: {radius: 2}}, material: wood}\n",
+      "test.yaml");
+  const Body &a = s.bodies[0], &b = s.bodies[1], &c = s.bodies[2];
+  EXPECT_EQ(a.friction, 0.4);
+  EXPECT_EQ(a.restitution, 0.2);
+  EXPECT_EQ(a.linear_damping, 0.05);
+  EXPECT_EQ(a.angular_damping, 0.2);
+  ASSERT_TRUE(a.color);
+  EXPECT_EQ(*a.color, Vec3(0.5, 0.5, 0.6));
+  EXPECT_EQ(b.friction, 0.9);
+  EXPECT_EQ(b.restitution, 0.2);
+  EXPECT_EQ(b.linear_damping, 0.05);
+  EXPECT_EQ(b.angular_damping, 0.7);
+  EXPECT_EQ(*b.color, Vec3(1, 0, 0));
+  EXPECT_EQ(c.friction, 0.5);  // the format's defaults
+  EXPECT_EQ(c.restitution, 0.1);
+  EXPECT_EQ(c.linear_damping, 0);
+  EXPECT_EQ(c.angular_damping, 0);
+  EXPECT_FALSE(c.color);
+}
+
+TEST(SceneValidation, DampingColourAndMaterialSurfaceKeysOutOfRange) {
+  const Diagnostics d = problems(
+      "magbake: 1.1\nunits: {length: mm, angle: deg}\n"
+      "materials:\n"
+      "  steel: {kind: soft, chi: 700, density: 7850, friction: -1, restitution: 2, damping: {linear: 1}, color: [0, 2, 0]}\n"
+      "bodies:\n"
+      "  - {name: a, shape: {sphere: {radius: 2}}, material: steel, damping: {angular: -0.1}, friction: 101}\n"
+      "  - {name: b, shape: {sphere: {radius: 2}}, material: steel, color: [1, 0.5, 1.5]}\n");
+  EXPECT_TRUE(has(d, 4, 58, "materials.steel.friction")) << d.format();
+  EXPECT_TRUE(has(d, 4, 75, "must be in [0, 1]"));
+  EXPECT_TRUE(has(d, 4, 96, "must be in [0, 1): the share of the velocity lost per second"));
+  EXPECT_TRUE(has(d, 4, 107, "expected [r, g, b] with each in [0, 1]"));
+  EXPECT_TRUE(has(d, 6, 81, "bodies[0].damping.angular"));
+  EXPECT_TRUE(has(d, 6, 98, "must be in [0, 100]"));
+  EXPECT_TRUE(has(d, 7, 69, "bodies[1].color"));
+  EXPECT_EQ(d.items().size(), 7u) << d.format();
+}
+
+TEST(SceneValidation, DampingAndColourOfTheWrongShape) {
+  const Diagnostics d = problems(
+      "magbake: 1.1\nunits: {length: mm, angle: deg}\n" + kMat.substr(0, kMat.find("  steel")) +
+      "  steel: {kind: soft, chi: 700, density: 7850}\n"
+      "bodies:\n"
+      "  - {name: a, shape: {sphere: {radius: 2}}, material: steel, damping: {angular: 0.1, spin: 1}, color: [1, 0]}\n"
+      "  - {name: b, shape: {sphere: {radius: 2}}, material: steel, damping: 0.5, color: red}\n");
+  EXPECT_TRUE(has(d, 7, 86, "unknown key 'spin'")) << d.format();
+  EXPECT_TRUE(has(d, 7, 103, "expected a list of 3 numbers, got 2"));
+  EXPECT_TRUE(has(d, 8, 71, "expected a mapping, got '0.5'"));
+  EXPECT_TRUE(has(d, 8, 83, "expected a list of 3 numbers"));
+}
+
 TEST(SceneValidation, DuplicateKeys) {
   EXPECT_TRUE(has(problems(kHead + "name: a\nname: b\n"), 4, 1, "duplicate key 'name'"));
   EXPECT_TRUE(has(problems(kHead + "materials:\n  m: {kind: none}\n  m: {kind: none}\n"), 5, 3, "duplicate key 'm'"));
