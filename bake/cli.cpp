@@ -82,6 +82,14 @@ std::string scene_summary(const scene::Scene& s, bool all_bodies) {
     os << buf;
   }
   if (shown < s.bodies.size()) os << "  ... and " << s.bodies.size() - shown << " more (--verbose lists every body)\n";
+  if (!s.joints.empty()) {
+    os << "joints   " << s.joints.size() << ":";
+    for (const scene::Joint& j : s.joints) {
+      os << "  " << j.name << " (" << j.type_name << " " << s.bodies[j.a].name << "-"
+         << (j.b >= 0 ? s.bodies[j.b].name : std::string("world")) << ")";
+    }
+    os << "\n";
+  }
   os << "outputs  cache " << (s.cache ? *s.cache : "(none)");
   if (s.field) os << "; field " << s.field->path;
   if (s.preview) os << "; preview " << s.preview->path << " " << s.preview->width << "x" << s.preview->height;
@@ -148,6 +156,14 @@ nlohmann::json scene_summary_json(const scene::Scene& s) {
               {"damping", damping(b.linear_damping, b.angular_damping)}};
     if (b.color) o["color"] = json_vec(*b.color);
     j["bodies"].push_back(o);
+  }
+  j["joints"] = json::array();
+  for (const scene::Joint& jt : s.joints) {
+    json o = {{"name", jt.name},
+              {"type", jt.type_name},
+              {"bodies", {s.bodies[jt.a].name, jt.b >= 0 ? s.bodies[jt.b].name : std::string("world")}}};
+    if (jt.limits) o["limits"] = {jt.limits->first, jt.limits->second};
+    j["joints"].push_back(o);
   }
   json out = {{"cache", s.cache ? json(*s.cache) : json(nullptr)}, {"usd", s.usd ? json(*s.usd) : json(nullptr)}};
   out["field"] = s.field ? json(s.field->path) : json(nullptr);

@@ -45,7 +45,8 @@ std::string scene_summary(const scene::Scene& s, bool all_bodies = false);
 /// induction, induction_tolerance, external_field_T}, materials [{name, kind, remanence_T, chi,
 /// density, friction, restitution, damping, color}] (keys present where set), bodies [{name,
 /// shape, material, parts, motion, mass_kg, friction, restitution, damping {linear, angular},
-/// color}] (every body), outputs {cache, usd, field, preview}. SI throughout.
+/// color}] (every body), joints [{name, type, bodies [a, b or "world"], limits (rad or m)}],
+/// outputs {cache, usd, field, preview}. SI throughout.
 nlohmann::json scene_summary_json(const scene::Scene& s);
 
 /// `check`: validates, prints the summary and the expected cost of a bake (from a trial bake of

@@ -149,6 +149,29 @@ class Reader {
     out.set = true;
   }
 
+  // A list of 1 to `most` strings.
+  Val<std::vector<std::string>> strings(const YAML::Node& map, const char* key, const std::string& path, std::size_t most) {
+    Val<std::vector<std::string>> out;
+    const YAML::Node n = map[key];
+    if (!n.IsDefined()) return out;
+    out.loc = loc_of(n);
+    const std::string kp = join(path, key);
+    const std::string want = "a list of 1 to " + std::to_string(most) + " names";
+    if (!n.IsSequence() || n.size() == 0 || n.size() > most) {
+      d_.add(out.loc, kp, "expected " + want + ", got " + show(n));
+      return out;
+    }
+    for (const auto& e : n) {
+      if (!e.IsScalar()) {
+        d_.add(loc_of(e), kp, "expected " + want + ", got " + show(e) + " in it");
+        return out;
+      }
+      out.v.push_back(e.Scalar());
+    }
+    out.set = true;
+    return out;
+  }
+
   static std::string join(const std::string& path, const std::string& key) {
     return path.empty() ? key : path + "." + key;
   }
@@ -254,7 +277,7 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
   Reader r(d);
   const YAML::Node& c = root;
   s.root = {1, 1};
-  if (!r.mapping(c, "", {"magbake", "name", "units", "time", "gravity", "magnetics", "materials", "bodies", "outputs"},
+  if (!r.mapping(c, "", {"magbake", "name", "units", "time", "gravity", "magnetics", "materials", "bodies", "joints", "outputs"},
                  {"magbake", "units"}, s.root)) {
     return s;
   }
@@ -388,6 +411,26 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
           }
         }
         s.bodies.push_back(std::move(b));
+      }
+    }
+  }
+  if (const YAML::Node joints = c["joints"]; joints.IsDefined()) {
+    if (!joints.IsSequence()) {
+      d.add(loc_of(joints), "joints", "expected a list of joints, got " + show(joints));
+    } else {
+      int i = 0;
+      for (const auto& jn : joints) {
+        JointSpec j;
+        j.loc = loc_of(jn);
+        const std::string jp = "joints[" + std::to_string(i++) + "]";
+        if (!r.mapping(jn, jp, {"name", "type", "bodies", "pivot", "axis", "limits"}, {"type", "bodies"}, j.loc)) continue;
+        j.name = r.text(jn, "name", jp);
+        j.type = r.text(jn, "type", jp);
+        j.bodies = r.strings(jn, "bodies", jp, 2);
+        j.pivot = r.vector(jn, "pivot", jp, 3);
+        j.axis = r.vector(jn, "axis", jp, 3);
+        j.limits = r.vector(jn, "limits", jp, 2);
+        s.joints.push_back(j);
       }
     }
   }

@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "geometry/shapes.h"
@@ -97,6 +98,25 @@ struct Body {
   bool magnetic(const std::vector<Material>& materials) const;
 };
 
+/// A joint (scene format 1.1): a Bullet constraint between two bodies or a body and the world,
+/// made from the initial poses (docs/scene-format.md, "joints").
+enum class JointType { kHinge, kBall, kFixed, kSlider };
+
+struct Joint {
+  std::string name;        ///< as written, or "joint <index>"
+  JointType type = JointType::kHinge;
+  std::string type_name;   ///< hinge | ball | fixed | slider
+  int a = -1;              ///< body index
+  int b = -1;              ///< body index, or -1 for the world
+  /// The joint frame in body a's frame and in body b's (the world's if b < 0), m: both are the
+  /// same world frame at t = 0 (origin at the pivot; z along the hinge's or slider's axis), so
+  /// the initial configuration is the joint's zero (angle 0, slide 0).
+  Pose frame_a, frame_b;
+  /// Hinge: the angle about z (rad), slider: the slide along z (m), from the initial
+  /// configuration; unset = free.
+  std::optional<std::pair<double, double>> limits;
+};
+
 /// Magnetics settings after presets are resolved.
 struct MagneticsSettings {
   std::string quality = "default";   ///< draft | default | high
@@ -160,6 +180,7 @@ struct Scene {
   MagneticsSettings magnetics;
   std::vector<Material> materials;
   std::vector<Body> bodies;
+  std::vector<Joint> joints;            ///< format 1.1
   std::optional<std::string> cache;     ///< as written (relative to the working directory)
   std::optional<std::string> usd;       ///< outputs.usd: a USD stage (.usda) the bake writes at its end (docs/usd.md)
   std::optional<FieldOutput> field;

@@ -90,6 +90,13 @@ struct MaterialSpecS {
   Val<Vec> color;
 };
 
+struct JointSpec {
+  Loc loc;
+  Val<std::string> name, type;
+  Val<std::vector<std::string>> bodies;
+  Val<Vec> pivot, axis, limits;
+};
+
 struct CameraSpec {
   bool set = false;
   Loc loc;
@@ -115,6 +122,7 @@ struct SceneSpec {
   Val<Vec> external_field;
   std::vector<MaterialSpecS> materials;
   std::vector<BodySpecS> bodies;
+  std::vector<JointSpec> joints;
   // outputs
   Val<std::string> cache, usd;
   bool field_set = false;

@@ -707,6 +707,97 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
     sc.bodies.push_back(std::move(b));
   }
 
+  // Joints (format 1.1): frames from the initial poses.
+  for (std::size_t i = 0; i < s.joints.size(); ++i) {
+    const JointSpec& js = s.joints[i];
+    const std::string jp = "joints[" + std::to_string(i) + "]";
+    Joint j;
+    j.name = js.name.set ? js.name.v : "joint " + std::to_string(i);
+    bool ok = true;
+    if (js.type.set) {
+      j.type_name = js.type.v;
+      if (js.type.v == "hinge") j.type = JointType::kHinge;
+      else if (js.type.v == "ball") j.type = JointType::kBall;
+      else if (js.type.v == "fixed") j.type = JointType::kFixed;
+      else if (js.type.v == "slider") j.type = JointType::kSlider;
+      else {
+        const std::string guess = did_you_mean(js.type.v, {"hinge", "ball", "fixed", "slider"});
+        d.add(js.type.loc, jp + ".type",
+              "unknown joint type '" + js.type.v + "'" + (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
+                  "; expected hinge, ball, fixed or slider");
+        ok = false;
+      }
+    }
+    int ends[2] = {-1, -1};
+    if (js.bodies.set) {
+      for (std::size_t k = 0; k < js.bodies.v.size(); ++k) {
+        const std::string& name = js.bodies.v[k];
+        if (k == 1 && name == "world") continue;
+        const int idx = sc.body_index(name);
+        if (idx < 0) {
+          std::vector<std::string> all;
+          for (const Body& b : sc.bodies) all.push_back(b.name);
+          const std::string guess = did_you_mean(name, all);
+          d.add(js.bodies.loc, jp + ".bodies",
+                "unknown body '" + name + "'" + (guess.empty() ? "" : " (did you mean '" + guess + "'?)"));
+          ok = false;
+        }
+        ends[k] = idx;
+      }
+      if (ok && ends[0] == ends[1]) {
+        d.add(js.bodies.loc, jp + ".bodies", "a joint needs two different bodies (or one and the world)");
+        ok = false;
+      }
+      if (ok) {
+        const bool dyn0 = sc.bodies[ends[0]].motion == Motion::kDynamic;
+        const bool dyn1 = ends[1] >= 0 && sc.bodies[ends[1]].motion == Motion::kDynamic;
+        if (!dyn0 && !dyn1) {
+          d.add(js.bodies.loc, jp + ".bodies", "a joint holds a dynamic body; these are static or kinematic");
+          ok = false;
+        }
+      }
+    }
+    const bool axial = j.type == JointType::kHinge || j.type == JointType::kSlider;
+    if (js.type.set && ok && axial && !js.axis.set) d.add(js.loc, jp, "a " + j.type_name + " joint needs its axis: [x, y, z] (world)");
+    if (js.axis.set && !axial && js.type.set) d.add(js.axis.loc, jp + ".axis", "only hinge and slider joints have an axis");
+    if (js.type.set && (j.type == JointType::kHinge || j.type == JointType::kBall) && !js.pivot.set) {
+      d.add(js.loc, jp, "a " + j.type_name + " joint needs its pivot: [x, y, z] (world, at the start)");
+    }
+    if (js.limits.set) {
+      const double scale = j.type == JointType::kHinge ? c.A : c.L;
+      if (!axial) {
+        d.add(js.limits.loc, jp + ".limits", "only hinge (angles) and slider (lengths) joints have limits");
+      } else if (!within(c, js.limits, jp + ".limits", 1e6, 1, "")) {
+      } else if (!(js.limits.v[0] <= 0 && js.limits.v[1] >= 0)) {
+        d.add(js.limits.loc, jp + ".limits",
+              "expected [lower, upper] with lower <= 0 <= upper: limits count from where the bodies start");
+      } else if (j.type == JointType::kHinge && (js.limits.v[0] * c.A < -kPi || js.limits.v[1] * c.A > kPi)) {
+        d.add(js.limits.loc, jp + ".limits", "a hinge's limits lie within [-180, 180] degrees");
+      } else {
+        j.limits = std::pair{js.limits.v[0] * scale, js.limits.v[1] * scale};
+      }
+    }
+    std::optional<Vec3> pivot, axis;
+    if (js.pivot.set && within(c, js.pivot, jp + ".pivot", kMaxCoordinate, c.L, "m")) pivot = vec3(js.pivot, c.L);
+    if (js.axis.set) axis = direction(c, js.axis, jp + ".axis");
+    if (!ok || !js.type.set || !js.bodies.set) continue;
+    // The joint frame in the world at t = 0: origin at the pivot (body a's origin if none is
+    // given), z along the axis (any frame for a ball or fixed joint).
+    const Pose pa = sc.bodies[ends[0]].pose_at(0.0);
+    Pose world{Quat::Identity(), pivot.value_or(pa.position)};
+    if (axis) world.rotation = Quat::FromTwoVectors(Vec3::UnitZ(), *axis);
+    auto in_body = [&](int b) {
+      if (b < 0) return world;
+      const Pose p = sc.bodies[b].pose_at(0.0);
+      const Quat inv = p.rotation.conjugate();
+      return Pose{(inv * world.rotation).normalized(), inv * (world.position - p.position)};
+    };
+    j.a = ends[0], j.b = ends[1];
+    j.frame_a = in_body(j.a);
+    j.frame_b = in_body(j.b);
+    sc.joints.push_back(j);
+  }
+
   // Outputs.
   if (s.cache.set) {
     // Absolute paths pass here; the command refuses them unless --allow-absolute-outputs.

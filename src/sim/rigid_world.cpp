@@ -266,6 +266,9 @@ struct RigidWorld::Impl {
   // Bullet's body frame in the scene body frame: x_body = principal * x_bullet + origin.
   std::vector<Mat3> principal;
   std::vector<Vec3> origin;
+  // The scene's joints (format 1.1) as Bullet constraints, made afresh with the world at every
+  // reset (their warm-start impulses are not part of the state, so a resumed bake matches).
+  std::vector<std::unique_ptr<btTypedConstraint>> joints;
 
   explicit Impl(const scene::Scene& s) : scene(s) {}
 
@@ -430,6 +433,65 @@ struct RigidWorld::Impl {
     return compound;
   }
 
+  // A frame given in the scene body frame of body b (the world if b < 0) in Bullet's frame of
+  // that body: x_bullet = P^T (x_body - o).
+  btTransform joint_frame(int b, const magnetics::Pose& f, const Quat& turn = Quat::Identity()) const {
+    const Mat3 Pt = b < 0 ? Mat3::Identity() : Mat3(principal[b].transpose());
+    const Vec3 o = b < 0 ? Vec3::Zero() : origin[b];
+    btTransform tr;
+    tr.setOrigin(bt(Vec3(Pt * (f.position - o))));
+    tr.setBasis(btMatrix3x3(bt(Quat(Pt * (f.rotation * turn).toRotationMatrix()).normalized())));
+    return tr;
+  }
+
+  void clear_joints() {
+    for (auto& c : joints) world->removeConstraint(c.get());
+    joints.clear();
+  }
+
+  // The scene's joints between the current bodies; collisions between the two bodies of a joint
+  // are off (a needle on its pin, a hinge's leaves).
+  void make_joints() {
+    for (const scene::Joint& j : scene.joints) {
+      btRigidBody& a = *bodies[j.a];
+      btRigidBody& b = j.b >= 0 ? *bodies[j.b] : btTypedConstraint::getFixedBody();
+      std::unique_ptr<btTypedConstraint> c;
+      switch (j.type) {
+        case scene::JointType::kHinge: {
+          auto h = std::make_unique<btHingeConstraint>(a, b, joint_frame(j.a, j.frame_a), joint_frame(j.b, j.frame_b), false);
+          if (j.limits) h->setLimit(btScalar(j.limits->first), btScalar(j.limits->second));
+          c = std::move(h);
+          break;
+        }
+        case scene::JointType::kBall:
+          c = std::make_unique<btPoint2PointConstraint>(a, b, joint_frame(j.a, j.frame_a).getOrigin(),
+                                                         joint_frame(j.b, j.frame_b).getOrigin());
+          break;
+        case scene::JointType::kFixed:
+          c = std::make_unique<btFixedConstraint>(a, b, joint_frame(j.a, j.frame_a), joint_frame(j.b, j.frame_b));
+          break;
+        case scene::JointType::kSlider: {
+          // Bullet slides along its frames' x: turn the joint frame's z (the axis) onto x, and give
+          // b first, so that Bullet's position is a's slide along +axis relative to b.
+          const Quat z_to_x(Eigen::AngleAxisd(-std::numbers::pi / 2, Vec3::UnitY()));
+          auto sl = std::make_unique<btSliderConstraint>(b, a, joint_frame(j.b, j.frame_b, z_to_x),
+                                                         joint_frame(j.a, j.frame_a, z_to_x), true);
+          if (j.limits) {
+            sl->setLowerLinLimit(btScalar(j.limits->first));
+            sl->setUpperLinLimit(btScalar(j.limits->second));
+          } else {
+            sl->setLowerLinLimit(1), sl->setUpperLinLimit(-1);  // free
+          }
+          sl->setLowerAngLimit(0), sl->setUpperAngLimit(0);  // no turning about the axis
+          c = std::move(sl);
+          break;
+        }
+      }
+      world->addConstraint(c.get(), true);
+      joints.push_back(std::move(c));
+    }
+  }
+
   btTransform bullet_transform(int b, const Quat& q_body, const Vec3& com_world) const {
     // x_world = R (x_body - com) + com_world; x_body = P x_bullet + o.
     const Mat3 R = q_body.toRotationMatrix();
@@ -545,9 +607,11 @@ RigidWorld::RigidWorld(const scene::Scene& scene) : impl_(std::make_unique<Impl>
     stick[i] = {scene.bodies[i].motion == scene::Motion::kDynamic, m.magnetic[i], m.permanent[i], m.extent[i]};
   }
   m.stuck = std::make_unique<StuckContacts>(std::move(stick));
+  m.make_joints();
 }
 
 RigidWorld::~RigidWorld() {
+  impl_->clear_joints();
   impl_->stuck->clear(*impl_->world);
   for (auto& b : impl_->bodies) impl_->world->removeRigidBody(b.get());
 }
@@ -560,11 +624,13 @@ void RigidWorld::set_state(const SimState& s) {
 
 void RigidWorld::reset(const SimState& s) {
   Impl& m = *impl_;
+  m.clear_joints();
   m.stuck->clear(*m.world);
   for (auto& b : m.bodies) m.world->removeRigidBody(b.get());
   m.make_world();
   m.put_bodies(s);
   for (auto& b : m.bodies) m.world->addRigidBody(b.get());
+  m.make_joints();
   m.stuck->restore(*m.world, m.bodies, s.stuck_joints);
   gDbvtMargin = m.dbvt_margin;
   m.world->performDiscreteCollisionDetection();
@@ -683,6 +749,11 @@ void RigidWorld::islands(std::vector<int>& island) const {
     if (i < 0 || j < 0 || island[i] < 0 || island[j] < 0) continue;
     const int a = root(i), b = root(j);
     if (a != b) island[std::max(a, b)] = std::min(a, b);  // the smaller index is the root
+  }
+  for (const scene::Joint& j : m.scene.joints) {  // jointed bodies move together
+    if (j.b < 0 || island[j.a] < 0 || island[j.b] < 0) continue;
+    const int a = root(j.a), b = root(j.b);
+    if (a != b) island[std::max(a, b)] = std::min(a, b);
   }
   for (int i = 0; i < n; ++i) {
     if (island[i] >= 0) island[i] = root(i);

@@ -218,6 +218,45 @@ TEST(SceneValidation, DampingAndColourOfTheWrongShape) {
   EXPECT_TRUE(has(d, 8, 83, "expected a list of 3 numbers"));
 }
 
+// Joints (format 1.1): every mistake at its file:line:col.
+TEST(SceneValidation, JointsAreCheckedAtTheirPositions) {
+  const Diagnostics d = problems(
+      "magbake: 1.1\nunits: {length: mm, angle: deg}\n" + kMat +
+      "bodies: [{name: needle, shape: {box: [30, 2, 1]}, material: N42, magnetization: [1, 0, 0]},"
+      " {name: table, shape: {box: [9, 9, 1]}, material: steel, motion: static}]\n"
+      "joints:\n"
+      "  - {type: hinge, bodies: [needle], axis: [0, 0, 1]}\n"
+      "  - {type: hinj, bodies: [needle], pivot: [0, 0, 0], axis: [0, 0, 1]}\n"
+      "  - {type: ball, bodies: [needel], pivot: [0, 0, 0]}\n"
+      "  - {type: ball, bodies: [needle, needle], pivot: [0, 0, 0]}\n"
+      "  - {type: fixed, bodies: [table]}\n"
+      "  - {type: ball, bodies: [needle], pivot: [0, 0, 0], axis: [1, 0, 0]}\n"
+      "  - {type: hinge, bodies: [needle], pivot: [0, 0, 0], axis: [0, 0, 1], limits: [10, 20]}\n"
+      "  - {type: slider, bodies: [needle], axis: [0, 0, 0]}\n"
+      "  - {type: hinge, bodies: [needle], pivot: [0, 0, 0], axis: [0, 0, 1], limits: [-200, 20]}\n"
+      "  - {type: fixed, bodies: [needle], limits: [-1, 1]}\n");
+  EXPECT_TRUE(has(d, 8, 5, "a hinge joint needs its pivot")) << d.format();
+  EXPECT_TRUE(has(d, 9, 12, "unknown joint type 'hinj' (did you mean 'hinge'?)"));
+  EXPECT_TRUE(has(d, 10, 26, "unknown body 'needel' (did you mean 'needle'?)"));
+  EXPECT_TRUE(has(d, 11, 26, "two different bodies"));
+  EXPECT_TRUE(has(d, 12, 27, "a joint holds a dynamic body"));
+  EXPECT_TRUE(has(d, 13, 60, "only hinge and slider joints have an axis"));
+  EXPECT_TRUE(has(d, 14, 80, "lower <= 0 <= upper"));
+  EXPECT_TRUE(has(d, 15, 44, "zero vector"));
+  EXPECT_TRUE(has(d, 16, 80, "within [-180, 180] degrees"));
+  EXPECT_TRUE(has(d, 17, 45, "only hinge (angles) and slider (lengths) joints have limits"));
+  EXPECT_EQ(d.items().size(), 10u) << d.format();
+  const Diagnostics p = problems("magbake: 1.1\nunits: {length: mm, angle: deg}\n" + kMat +
+                                 "joints:\n"
+                                 "  - {type: slider, bodies: [], axis: [1, 0, 0]}\n"
+                                 "  - {type: ball, bodies: [a, b, c], pivot: [0, 0, 0], spring: 3}\n"
+                                 "  - {bodies: [a]}\n");
+  EXPECT_TRUE(has(p, 7, 28, "expected a list of 1 to 2 names")) << p.format();
+  EXPECT_TRUE(has(p, 8, 26, "expected a list of 1 to 2 names"));
+  EXPECT_TRUE(has(p, 8, 55, "unknown key 'spring'"));
+  EXPECT_TRUE(has(p, 9, 5, "missing required key 'type'"));
+}
+
 TEST(SceneValidation, DuplicateKeys) {
   EXPECT_TRUE(has(problems(kHead + "name: a\nname: b\n"), 4, 1, "duplicate key 'name'"));
   EXPECT_TRUE(has(problems(kHead + "materials:\n  m: {kind: none}\n  m: {kind: none}\n"), 5, 3, "duplicate key 'm'"));
