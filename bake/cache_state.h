@@ -24,7 +24,9 @@ std::vector<io::StuckRow> cache_stuck_rows(const sim::SimState& s);
 /// Appends the frame of `s` (cache_frame, cache_observables, cache_stuck_rows) to `writer`.
 inline void append_frame(io::CacheWriter& writer, int frame, double time, const sim::SimState& s,
                          const sim::FrameDiagnostics& d, const scene::Scene& scene) {
-  writer.append(cache_frame(frame, time, s, scene), cache_observables(d), cache_stuck_rows(s));
+  io::FrameObservables o = cache_observables(d);
+  o.applied_field = scene.applied_field(s.time);
+  writer.append(cache_frame(frame, time, s, scene), o, cache_stuck_rows(s));
 }
 
 /// The simulation state a bake resumes from: frame `index` of `cache` (poses, velocities, the

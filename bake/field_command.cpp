@@ -102,9 +102,10 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
   // applied field's strength if that is larger (soft bodies in a coil).
   double max_magnetization = 0;
   for (const Vec3& M : model.part_magnetization) max_magnetization = std::max(max_magnetization, M.norm());
-  const std::vector<double> ext = cache->parameter_doubles("external_field");
-  const Vec3 applied(ext.at(0), ext.at(1), ext.at(2));
-  double reference = std::max(magnetics::kMu0 * max_magnetization, applied.norm());
+  // The applied field may change from frame to frame (scene 1.1): its strongest value.
+  double applied_max = 0;
+  for (int i = 0; i < cache->frame_count(); ++i) applied_max = std::max(applied_max, cache->applied_field(i).norm());
+  double reference = std::max(magnetics::kMu0 * max_magnetization, applied_max);
   if (!(reference > 0)) reference = 1.0;  // no source: no field anywhere, nothing active
   double threshold = io::kAutoThresholdFraction * reference;
   if (req.threshold) threshold = *req.threshold;
@@ -184,7 +185,7 @@ int export_field(const std::string& cache_path, const FieldRequest& req, const G
     samples.origin = lo;
     samples.voxel = voxel;
     samples.dims = dims;
-    samples.applied = applied;
+    samples.applied = fr.applied_field;
     evaluate_field_grid(model, st, opt, threshold, samples);
     io::VolumeInfo info;
     info.frame = fr.frame;

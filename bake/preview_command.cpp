@@ -115,8 +115,6 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
   magnetics::Model model;
   magnetics::State st;
   const auto coms = cache->centers_of_mass();
-  const std::vector<double> ext = cache->parameter_doubles("external_field");
-  const Vec3 applied(ext.at(0), ext.at(1), ext.at(2));
   if (with_lines) {
     model = cache->model(&induced_order);
     st.resize(model);
@@ -166,7 +164,7 @@ int export_preview(const std::string& cache_path, const PreviewRequest& req, con
     std::vector<render::Polyline> lines;
     if (with_lines && !model.empty()) {
       place_frame(model, coms, induced_order, fr, st);
-      lines = trace_field_lines(model, st, applied, line_bounds);
+      lines = trace_field_lines(model, st, fr.applied_field, line_bounds);
     }
     const auto t1 = Clock::now();
     const std::vector<std::uint8_t> rgba = renderer->draw(view, xf, lines);

@@ -32,7 +32,7 @@ Evaluated evaluate_at(const scene::Scene& s, double t) {
   e.model = scene::build_magnetics_model(s);
   e.state.resize(e.model);
   scene::set_poses_at(s, t, e.state);
-  e.settings = scene::magnetics_settings(s);
+  e.settings = scene::magnetics_settings(s, t);
   const auto t0 = std::chrono::steady_clock::now();
   magnetics::evaluate(e.model, e.settings, e.state, e.result);
   e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -221,8 +221,6 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
   if (req.field_lines && magnetic_any) {
     const magnetics::Box3 region = field_line_region(shot_box(geo, frames));
     const std::vector<Vec3> coms = cache->centers_of_mass();
-    const std::vector<double> ext = cache->parameter_doubles("external_field");
-    const Vec3 applied(ext.at(0), ext.at(1), ext.at(2));
     magnetics::State st;
     st.resize(model);
     usd::Attribute counts{"curveVertexCounts", "int[]"}, points{"points", "point3f[]"}, colors{"primvars:displayColor", "color3f[]"},
@@ -237,7 +235,7 @@ int cmd_export_usd(const std::string& cache_path, const UsdRequest& req, const G
         return kInterrupted;
       }
       place_frame(model, coms, induced_order, fr, st);
-      const std::vector<render::Polyline> lines = trace_field_lines(model, st, applied, region);
+      const std::vector<render::Polyline> lines = trace_field_lines(model, st, fr.applied_field, region);
       render::Vec3f lo = render::Vec3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
       std::vector<int> n_of;
       std::vector<usd::Vec3f> p, c;

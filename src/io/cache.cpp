@@ -37,8 +37,11 @@ constexpr Series kObservables[] = {{"kinetic_energy", 1, "kg m2 s-2"},      {"gr
                                    {"induction_iterations", 1, ""},         {"induction_residual", 1, ""},
                                    {"substeps", 1, ""},                     {"energy_drift", 1, "kg m2 s-2"},
                                    {"max_speed", 1, "m s-1"},               {"max_penetration", 1, "m"},
-                                   {"sleeping", 1, ""},                     {"body_steps", 1, ""}};
-constexpr std::size_t kRequiredObservables = 14;  // "sleeping" and "body_steps" are optional when read
+                                   {"sleeping", 1, ""},                     {"body_steps", 1, ""},
+                                   {"applied_field", 3, "T"}};
+// "sleeping", "body_steps" and "applied_field" are optional when read (older caches lack them;
+// CacheReader::applied_field falls back to /parameters@external_field).
+constexpr std::size_t kRequiredObservables = 14;
 
 std::vector<double> flat(const std::vector<Vec3>& v) {
   std::vector<double> out;
@@ -363,7 +366,8 @@ void CacheWriter::append(const CacheFrame& fr, const FrameObservables& d, const 
                            {d.max_speed},
                            {d.max_penetration},
                            {d.sleeping},
-                           {d.body_steps}};
+                           {d.body_steps},
+                           {d.applied_field[0], d.applied_field[1], d.applied_field[2]}};
   static_assert(std::size(obs) == std::size(kObservables));
   for (std::size_t k = 0; k < m.observables.size(); ++k) {
     h5::write_row(m.observables[k].id(), H5T_NATIVE_DOUBLE, row, obs[k]);
@@ -393,12 +397,14 @@ void CacheWriter::copy_frames_from(const CacheReader& from, int count) {
   Impl& m = *impl_;
   auto copy = [&](const std::string& path, hid_t dataset, hid_t type, bool optional = false) {
     if (optional && !h5::exists(from.file(), path)) {
-      // A cache from before this series: zeros (every body awake, nothing asleep).
+      // A cache from before this series: zeros (every body awake, nothing asleep), and for the
+      // applied field the constant one it was baked with.
       const std::vector<hsize_t> shape = h5::shape(dataset);
       std::size_t row = 1;
       for (std::size_t k = 1; k < shape.size(); ++k) row *= shape[k];
-      const std::vector<double> zeros(row, 0.0);
-      for (int f = 0; f < count; ++f) h5::write_row(dataset, type, f, zeros.data());
+      std::vector<double> fill(row, 0.0);
+      if (path == "observables/applied_field/value") fill = from.parameter_doubles("external_field");
+      for (int f = 0; f < count; ++f) h5::write_row(dataset, type, f, fill.data());
       return;
     }
     h5::Handle src(h5::check_id(H5Dopen2(from.file(), path.c_str(), H5P_DEFAULT), "open " + path));
@@ -571,6 +577,7 @@ CacheFrame CacheReader::frame(int index) const {
     fr.sleep = h5::read_rows(f, "particles/bodies/sleep/value", index, 1);
     fr.sleep_reference = h5::read_rows(f, "particles/bodies/sleep_reference/value", index, 1);
   }
+  fr.applied_field = applied_field(index);
   if (layout_.induced > 0) {
     const std::vector<double> v = h5::read_rows(f, "magnetics/induced_moment/value", index, 1);
     for (std::size_t i = 0; i + 2 < v.size(); i += 3) fr.induced_moment.emplace_back(v[i], v[i + 1], v[i + 2]);
@@ -650,6 +657,23 @@ RenderGeometry CacheReader::geometry() const {
     if (!col.empty() && col[3 * s] >= 0) g.submeshes.back().color = Vec3(col[3 * s], col[3 * s + 1], col[3 * s + 2]);
   }
   return g;
+}
+
+Vec3 CacheReader::applied_field(int index) const {
+  const std::string path = "observables/applied_field/value";
+  if (!h5::exists(file(), path)) {
+    const std::vector<double> ext = parameter_doubles("external_field");
+    return Vec3(ext.at(0), ext.at(1), ext.at(2));
+  }
+  h5::Handle d(h5::check_id(H5Dopen2(file(), path.c_str(), H5P_DEFAULT), "open " + path));
+  const std::vector<hsize_t> shape = h5::shape(d.id());
+  if (shape.size() != 2 || shape[1] != 3 || index < 0 || shape[0] <= hsize_t(index)) {
+    throw h5::Error(path_ + ": /" + path + " does not hold frame " + std::to_string(index) + " as 3 numbers");
+  }
+  const std::vector<double> v = h5::read_rows(file(), path, index, 1);
+  const Vec3 b(v.at(0), v.at(1), v.at(2));
+  if (!b.allFinite()) throw h5::Error(path_ + ": /" + path + " holds a non-finite value at frame " + std::to_string(index));
+  return b;
 }
 
 std::vector<double> CacheReader::observable(const std::string& name) const {

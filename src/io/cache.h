@@ -37,6 +37,7 @@ struct FrameObservables {
   double magnetics_seconds = 0, rigid_seconds = 0;
   double cells_visited = 0, induction_iterations = 0, induction_residual = 0, substeps = 0;
   double energy_drift = 0, max_speed = 0, max_penetration = 0, sleeping = 0, body_steps = 0;
+  Vec3 applied_field = Vec3::Zero();  ///< the uniform applied field at the frame, T (scene 1.1)
 };
 
 /// One stuck contact joint as stored (a row of /contacts/stuck): the two body indices (a < b)
@@ -55,6 +56,9 @@ struct CacheFrame {
   /// (nbody x 2) sleep state and seconds at rest, (nbody x 6) wake-up reference force (N) and
   /// torque (N·m); empty for caches written before sleeping (writing: empty = every body awake).
   std::vector<double> sleep, sleep_reference;
+  /// The applied field at the frame (T, world), as read (CacheReader::applied_field); a writer
+  /// takes it from FrameObservables instead.
+  Vec3 applied_field = Vec3::Zero();
 };
 
 /// Writes a cache. Frames must be appended in order.
@@ -136,6 +140,11 @@ class CacheReader {
   /// A scalar per-frame observable (e.g. "magnetics_seconds") over the completed frames; empty
   /// when the cache does not hold it.
   std::vector<double> observable(const std::string& name) const;
+  /// The uniform applied field (T, world) at completed frame `index`: the per-frame record
+  /// (observables/applied_field, scene 1.1: animated fields), else the constant
+  /// /parameters@external_field of older caches. Throws h5::Error for a record that is not
+  /// [frames, 3] of finite values.
+  Vec3 applied_field(int index) const;
 
   CacheFrame frame(int index) const;                   ///< 0-based index of a completed frame
   /// One value of a scalar observable (e.g. "magnetic_energy") at a completed frame; throws

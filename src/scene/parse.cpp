@@ -312,7 +312,37 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
       s.surface_tolerance = r.number(m, "surface_tolerance", "magnetics");
       s.grading = r.number(m, "grading", "magnetics");
       s.soft_cells_across = r.number(m, "soft_cells_across", "magnetics");
-      s.external_field = r.vector(m, "external_field", "magnetics", 3);
+      // external_field: [bx, by, bz], keys [{t, B}, ...] (1.1) or {rotating: {...}} (1.1).
+      const YAML::Node ef = m["external_field"];
+      if (ef.IsDefined() && ef.IsSequence() && ef.size() > 0 && ef[0].IsMap()) {
+        s.external_field_keys_loc = loc_of(ef);
+        int k = 0;
+        for (const auto& kn : ef) {
+          SceneSpec::FieldKeySpec key;
+          key.loc = loc_of(kn);
+          const std::string kp = "magnetics.external_field[" + std::to_string(k++) + "]";
+          if (!r.mapping(kn, kp, {"t", "B"}, {"t", "B"}, key.loc)) continue;
+          key.t = r.number(kn, "t", kp);
+          key.B = r.vector(kn, "B", kp, 3);
+          s.external_field_keys.push_back(key);
+        }
+      } else if (ef.IsDefined() && ef.IsMap()) {
+        const std::string kp = "magnetics.external_field";
+        if (r.mapping(ef, kp, {"rotating"}, {"rotating"}, loc_of(ef))) {
+          const YAML::Node rn = ef["rotating"];
+          s.rotating_set = true;
+          s.rotating_loc = loc_of(rn);
+          const std::string rp = kp + ".rotating";
+          if (r.mapping(rn, rp, {"magnitude", "axis", "frequency", "from"}, {"magnitude", "frequency"}, s.rotating_loc)) {
+            s.rotating_magnitude = r.number(rn, "magnitude", rp);
+            s.rotating_frequency = r.number(rn, "frequency", rp);
+            s.rotating_axis = r.vector(rn, "axis", rp, 3);
+            s.rotating_from = r.vector(rn, "from", rp, 3);
+          }
+        }
+      } else {
+        s.external_field = r.vector(m, "external_field", "magnetics", 3);
+      }
     }
   }
   // Materials: a mapping of free names -> properties.

@@ -131,7 +131,20 @@ struct MagneticsSettings {
   /// Coupled induction: GMRES stops when the residual is below this fraction of the right-hand
   /// side (preset; physics.md §7 for what it changes in the forces).
   double induction_tolerance = 1e-4;
-  Vec3 external_field = Vec3::Zero();  ///< T
+  /// Uniform applied field, T: the constant one, or its value at t = 0 when it is animated
+  /// (Scene::applied_field gives it at any time).
+  Vec3 external_field = Vec3::Zero();
+  /// Format 1.1 `external_field: [{t, B}, ...]`: keys (t in s, increasing; B in T), linearly
+  /// interpolated, held before the first and after the last. Empty when constant or rotating.
+  std::vector<std::pair<double, Vec3>> external_field_keys;
+  /// Format 1.1 `external_field: {rotating: ...}`: a field of `magnitude` T turning about the unit
+  /// `axis` at `frequency` turns per second (right-handed; negative turns back), pointing along
+  /// the unit `from` (normal to the axis) at t = 0: B(t) = |B| (cos 2πft from + sin 2πft axis × from).
+  struct RotatingField {
+    double magnitude = 0, frequency = 0;
+    Vec3 axis = Vec3::UnitZ(), from = Vec3::UnitX();
+  };
+  std::optional<RotatingField> rotating_field;
   double near_field = 2.5;           ///< cell sizes (exact cuboid interactions within)
   int near_field_order = 4;
   /// Preset: curved permanent magnets keep their surface, tessellated within this distance (m),
@@ -195,6 +208,12 @@ struct Scene {
     return n < 1 ? 1 : static_cast<int>(n);
   }
   int body_index(const std::string& name) const;
+  /// The uniform applied field (T, world) at time t (s): constant, keyed or rotating.
+  Vec3 applied_field(double t) const;
+  /// True when the applied field changes with time (keys or rotating).
+  bool applied_field_animated() const {
+    return magnetics.external_field_keys.size() > 1 || (magnetics.rotating_field && magnetics.rotating_field->frequency != 0);
+  }
 };
 
 }  // namespace magbake::scene

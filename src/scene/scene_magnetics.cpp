@@ -35,13 +35,13 @@ bool apply_quality_preset(const std::string& quality, MagneticsSettings& mg) {
   return false;
 }
 
-magnetics::Settings magnetics_settings(const Scene& sc) {
+magnetics::Settings magnetics_settings(const Scene& sc, double t) {
   magnetics::Settings st;
   st.theta = sc.magnetics.theta;
   st.induction = sc.magnetics.induction == "off"     ? magnetics::InductionMode::kOff
                  : sc.magnetics.induction == "paper" ? magnetics::InductionMode::kPaper
                                                      : magnetics::InductionMode::kCoupled;
-  st.external_field = sc.magnetics.external_field;
+  st.external_field = sc.applied_field(t);
   st.near_field = sc.magnetics.near_field;
   st.near_field_order = sc.magnetics.near_field_order;
   st.induction_tolerance = sc.magnetics.induction_tolerance;

@@ -16,7 +16,7 @@ namespace magbake::scene {
 bool apply_quality_preset(const std::string& quality, MagneticsSettings& mg);
 
 /// Library settings from the scene (presets already resolved in the Scene).
-magnetics::Settings magnetics_settings(const Scene& scene);
+magnetics::Settings magnetics_settings(const Scene& scene, double t = 0);
 
 /// Susceptibility from which an induced material counts as soft (steel, mu-metal): its parts get
 /// MagneticsSettings::soft_cells_per_extent. Weak para- and diamagnets and superconductors

@@ -119,7 +119,20 @@ struct SceneSpec {
   Loc magnetics_loc;
   Val<std::string> quality, induction;
   Val<double> cell_size, theta, induction_tolerance, surface_tolerance, grading, soft_cells_across;
-  Val<Vec> external_field;
+  Val<Vec> external_field;  ///< the constant form [bx, by, bz]
+  /// Format 1.1: keys [{t, B}, ...] (loc of the list in external_field_keys_loc).
+  struct FieldKeySpec {
+    Loc loc;
+    Val<double> t;
+    Val<Vec> B;
+  };
+  std::vector<FieldKeySpec> external_field_keys;
+  Loc external_field_keys_loc;
+  /// Format 1.1: {rotating: {magnitude, axis, frequency, from}}.
+  bool rotating_set = false;
+  Loc rotating_loc;
+  Val<double> rotating_magnitude, rotating_frequency;
+  Val<Vec> rotating_axis, rotating_from;
   std::vector<MaterialSpecS> materials;
   std::vector<BodySpecS> bodies;
   std::vector<JointSpec> joints;

@@ -354,6 +354,24 @@ bool Body::magnetic(const std::vector<Material>& m) const {
   return false;
 }
 
+Vec3 Scene::applied_field(double t) const {
+  const MagneticsSettings& m = magnetics;
+  if (m.rotating_field) {
+    const auto& r = *m.rotating_field;
+    const double a = 2 * kPi * r.frequency * t;
+    return r.magnitude * (std::cos(a) * r.from + std::sin(a) * r.axis.cross(r.from));
+  }
+  const auto& k = m.external_field_keys;
+  if (k.empty()) return m.external_field;
+  if (t <= k.front().first) return k.front().second;
+  if (t >= k.back().first) return k.back().second;
+  const auto it = std::upper_bound(k.begin(), k.end(), t, [](double x, const auto& key) { return x < key.first; });
+  const auto& [t1, b1] = *it;
+  const auto& [t0, b0] = *(it - 1);
+  const double s = (t - t0) / (t1 - t0);
+  return (1 - s) * b0 + s * b1;
+}
+
 int Scene::body_index(const std::string& n) const {
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     if (bodies[i].name == n) return static_cast<int>(i);
@@ -496,6 +514,51 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
   }
   if (s.external_field.set && within(c, s.external_field, "magnetics.external_field", kMaxFieldTesla, 1, "T")) {
     mg.external_field = vec3(s.external_field);
+  }
+  {
+    double last_t = -std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < s.external_field_keys.size(); ++k) {
+      const auto& ks = s.external_field_keys[k];
+      const std::string kp = "magnetics.external_field[" + std::to_string(k) + "]";
+      if (!ks.t.set || !ks.B.set) continue;
+      if (!within(c, ks.t, kp + ".t", 1e9, 1, "s") || !within(c, ks.B, kp + ".B", kMaxFieldTesla, 1, "T")) continue;
+      if (!(ks.t.v > last_t)) {
+        d.add(ks.t.loc, kp + ".t", "keys out of time order: t = " + std::to_string(ks.t.v) +
+                                       " does not come after the previous key's t = " + std::to_string(last_t));
+      }
+      last_t = ks.t.v;
+      mg.external_field_keys.emplace_back(ks.t.v, vec3(ks.B));
+    }
+    if (!mg.external_field_keys.empty()) mg.external_field = mg.external_field_keys.front().second;
+  }
+  if (s.rotating_set && s.rotating_magnitude.set && s.rotating_frequency.set) {
+    const std::string rp = "magnetics.external_field.rotating";
+    MagneticsSettings::RotatingField rot;
+    bool ok = within(c, s.rotating_magnitude, rp + ".magnitude", kMaxFieldTesla, 1, "T") &&
+              within(c, s.rotating_frequency, rp + ".frequency", 1e6, 1, "Hz");
+    if (ok && !(s.rotating_magnitude.v >= 0)) {
+      d.add(s.rotating_magnitude.loc, rp + ".magnitude", "must be >= 0 (tesla)");
+      ok = false;
+    }
+    rot.magnitude = s.rotating_magnitude.v, rot.frequency = s.rotating_frequency.v;
+    if (s.rotating_axis.set) {
+      if (auto a = direction(c, s.rotating_axis, rp + ".axis")) rot.axis = *a;
+      else ok = false;
+    }
+    // `from`: its part normal to the axis; default x (or y if the axis is along x).
+    const Vec3 from = s.rotating_from.set ? vec3(s.rotating_from) : (std::abs(rot.axis.x()) > 0.9 ? Vec3::UnitY() : Vec3::UnitX());
+    const Vec3 normal = from - from.dot(rot.axis) * rot.axis;
+    if (normal.norm() < 1e-9 * std::max(1.0, from.norm())) {
+      d.add(s.rotating_from.set ? s.rotating_from.loc : s.rotating_loc, rp + ".from",
+            "must not be along the axis: it is where the field points at t = 0, normal to the axis");
+      ok = false;
+    } else {
+      rot.from = normal.normalized();
+    }
+    if (ok) {
+      mg.rotating_field = rot;
+      mg.external_field = rot.magnitude * rot.from;
+    }
   }
 
   // Format 1.1 surface and look keys, shared by materials and bodies.

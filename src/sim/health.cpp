@@ -10,6 +10,7 @@ HealthMonitor::HealthMonitor(const scene::Scene& scene, const SimState& initial)
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
     const scene::Body& b = scene.bodies[i];
     if (b.motion == scene::Motion::kKinematic && b.keys.size() > 1) energy_source_ = true;
+    if (scene.applied_field_animated()) energy_source_ = true;  // a coil switched or turned does work
     const double r = 0.5 * b.shape.shape->bounds().sizes().norm();
     region_.extend(Eigen::AlignedBox3d(initial.com_position[i] - Vec3::Constant(r), initial.com_position[i] + Vec3::Constant(r)));
   }

@@ -106,6 +106,7 @@ void Simulator::evaluate_magnetics(FrameDiagnostics& d) {
     mag_state_.body_fixed[i] = scene_.bodies[i].motion != scene::Motion::kDynamic || state_.sleep[i] == kAsleep ||
                                (holding_ && held_[i]);
   }
+  settings_.external_field = scene_.applied_field(state_.time);  // animated fields (scene 1.1)
   magnetics::evaluate(model_, settings_, mag_state_, mag_result_);
   state_.magnetic_force = mag_result_.force;
   state_.magnetic_torque = mag_result_.torque;

@@ -257,6 +257,25 @@ TEST(SceneValidation, JointsAreCheckedAtTheirPositions) {
   EXPECT_TRUE(has(p, 9, 5, "missing required key 'type'"));
 }
 
+// Animated applied fields (format 1.1): keys and the rotating form, checked where they are written.
+TEST(SceneValidation, AnimatedAppliedFieldsAreChecked) {
+  const std::string head = "magbake: 1.1\nunits: {length: mm, angle: deg}\n";
+  const Diagnostics keys = problems(head + "magnetics:\n  external_field:\n    - {t: 1, B: [0, 0, 200]}\n"
+                                           "    - {t: 0.5, B: [0, 0, 0]}\n    - {t: 2, Bx: [0, 0, 1]}\n");
+  EXPECT_TRUE(has(keys, 7, 14, "unknown key 'Bx'")) << keys.format();
+  EXPECT_TRUE(has(keys, 7, 7, "missing required key 'B'"));
+  const Diagnostics ranges = problems(head + "magnetics:\n  external_field:\n    - {t: 1, B: [0, 0, 200]}\n"
+                                             "    - {t: 2, B: [0, 0, 0]}\n    - {t: 1.5, B: [0, 0, 0]}\n");
+  EXPECT_TRUE(has(ranges, 5, 17, "at most 100 T")) << ranges.format();
+  EXPECT_TRUE(has(ranges, 7, 11, "keys out of time order"));
+  const Diagnostics rot = problems(head + "magnetics: {external_field: {rotating: {magnitude: -1, frequency: 2, axis: [0, 0, 1], from: [0, 0, 3]}}}\n");
+  EXPECT_TRUE(has(rot, 3, 52, "must be >= 0")) << rot.format();
+  EXPECT_TRUE(has(rot, 3, 93, "must not be along the axis"));
+  const Diagnostics missing = problems(head + "magnetics: {external_field: {rotating: {magnitude: 0.1}, spin: 1}}\n");
+  EXPECT_TRUE(has(missing, 3, 40, "missing required key 'frequency'")) << missing.format();
+  EXPECT_TRUE(has(missing, 3, 58, "unknown key 'spin'"));
+}
+
 TEST(SceneValidation, DuplicateKeys) {
   EXPECT_TRUE(has(problems(kHead + "name: a\nname: b\n"), 4, 1, "duplicate key 'name'"));
   EXPECT_TRUE(has(problems(kHead + "materials:\n  m: {kind: none}\n  m: {kind: none}\n"), 5, 3, "duplicate key 'm'"));
