@@ -60,6 +60,9 @@ std::string scene_summary(const scene::Scene& s, bool all_bodies) {
                 m.theta, m.near_field, m.near_field_order, m.induction.c_str(), m.induction_tolerance, m.external_field[0],
                 m.external_field[1], m.external_field[2]);
   os << buf;
+  if (s.applied_field_animated()) {
+    os << "          the applied field above is at t = 0; it is " << (m.rotating_field ? "rotating" : "keyed") << " (animated)\n";
+  }
   os << "materials";
   for (const auto& mt : s.materials) {
     os << "  " << mt.name << " (" << mt.kind_name;
@@ -120,7 +123,8 @@ nlohmann::json scene_summary_json(const scene::Scene& s) {
              {"near_field_order", m.near_field_order},
              {"induction", m.induction},
              {"induction_tolerance", m.induction_tolerance},
-             {"external_field_T", json_vec(m.external_field)}};
+             {"external_field_T", json_vec(m.external_field)},  // at t = 0
+             {"external_field_animated", s.applied_field_animated()}};
   if (m.cell_size) {
     mg["cell_size_m"] = *m.cell_size;
   } else {

@@ -42,7 +42,7 @@ std::string scene_summary(const scene::Scene& s, bool all_bodies = false);
 /// The same summary as JSON (`check --json`): scene, name, sha256, units, time {fps, frames,
 /// frame_count, duration_seconds, dt_seconds, substeps}, gravity (m/s²), magnetics {quality,
 /// cell_size_m or cells_across and soft_cells_across, theta, near_field_cells, near_field_order,
-/// induction, induction_tolerance, external_field_T}, materials [{name, kind, remanence_T, chi,
+/// induction, induction_tolerance, external_field_T (at t = 0), external_field_animated}, materials [{name, kind, remanence_T, chi,
 /// density, friction, restitution, damping, color}] (keys present where set), bodies [{name,
 /// shape, material, parts, motion, mass_kg, friction, restitution, damping {linear, angular},
 /// color}] (every body), joints [{name, type, bodies [a, b or "world"], limits (rad or m)}],

@@ -168,3 +168,25 @@ TEST(Scene, IdenticalShapesShareOneGeometryObject) {
 
 }  // namespace
 }  // namespace magbake::scene
+
+namespace magbake::scene {
+namespace {
+
+// The format 1.1 example shots (scenes/format11: a compass on a pivot, a damped pendulum, a
+// rotating field) load, with the joints, damping and fields they describe.
+TEST(Scene, TheFormat11ExampleShotsLoad) {
+  const Scene compass = load_scene(source_dir() + "/scenes/format11/compass.yaml");
+  ASSERT_EQ(compass.joints.size(), 1u);
+  EXPECT_EQ(compass.joints[0].type, JointType::kHinge);
+  EXPECT_EQ(compass.bodies[compass.joints[0].a].name, "needle");
+  EXPECT_GT(compass.bodies[compass.joints[0].a].angular_damping, 0);
+  const Scene pendulum = load_scene(source_dir() + "/scenes/format11/pendulum.yaml");
+  ASSERT_EQ(pendulum.joints.size(), 1u);
+  EXPECT_GT(pendulum.bodies[pendulum.body_index("bob")].linear_damping, 0);
+  const Scene rotating = load_scene(source_dir() + "/scenes/format11/rotating_field.yaml");
+  EXPECT_TRUE(rotating.applied_field_animated());
+  EXPECT_LT((rotating.applied_field(0.25) - Vec3(0, 0.002, 0)).norm(), 1e-15);
+}
+
+}  // namespace
+}  // namespace magbake::scene
