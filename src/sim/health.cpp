@@ -7,10 +7,10 @@ namespace magbake::sim {
 
 HealthMonitor::HealthMonitor(const scene::Scene& scene, const SimState& initial)
     : scene_(scene), left_at_(scene.bodies.size(), -1), left_where_(scene.bodies.size(), Vec3::Zero()) {
+  energy_source_ = scene.applied_field_animated();  // a coil switched or turned does work
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
     const scene::Body& b = scene.bodies[i];
     if (b.motion == scene::Motion::kKinematic && b.keys.size() > 1) energy_source_ = true;
-    if (scene.applied_field_animated()) energy_source_ = true;  // a coil switched or turned does work
     const double r = 0.5 * b.shape.shape->bounds().sizes().norm();
     region_.extend(Eigen::AlignedBox3d(initial.com_position[i] - Vec3::Constant(r), initial.com_position[i] + Vec3::Constant(r)));
   }

@@ -42,6 +42,24 @@ class Bake : public ::testing::Test {
   Outcome bake(const std::string& scene, const std::string& out, const std::string& extra = "") {
     return sh(exe() + " " + extra + " bake " + scene + " -o " + (dir / out).string());
   }
+  // For each k: a .partial holding the first k frames of `reader` (copied bit for bit, as an
+  // interrupted bake leaves them) is resumed on 1 thread and must give `full` to the last bit.
+  void expect_resumes_match(const std::string& scene_file, const scene::Scene& scene, const io::CacheReader& reader,
+                            const std::string& full, const std::string& cache_name, std::initializer_list<int> cuts) {
+    const magnetics::Model model = scene::build_magnetics_model(scene);
+    for (int k : cuts) {
+      const fs::path out = dir / ("cut" + std::to_string(k));
+      fs::create_directories(out);
+      {
+        io::CacheWriter w((out / (cache_name + ".partial")).string(), scene, model, "test");
+        w.copy_frames_from(reader, k);
+        w.set_status(io::BakeStatus::kInterrupted);
+      }
+      ASSERT_EQ(sh(exe() + " --threads 1 bake " + scene_file + " -o " + out.string() + " --resume").code, 0) << k;
+      const Outcome d = sh(exe() + " diff --exact " + full + " " + (out / cache_name).string());
+      EXPECT_EQ(d.code, 0) << "resumed after " << k << " frames:\n" << d.out;
+    }
+  }
 };
 
 TEST_F(Bake, SameThreadCountOrNotTheCacheIsIdentical) {
@@ -280,7 +298,6 @@ TEST_F(Bake, AResumeAfterAnyFrameGivesTheUninterruptedCacheBitForBit) {
   ASSERT_EQ(bake(scene_file, "full", "--threads 2").code, 0);
   const std::string full = (dir / "full/tumble.h5").string();
   const scene::Scene scene = scene::load_scene(scene_file);
-  const magnetics::Model model = scene::build_magnetics_model(scene);
   const io::CacheReader reader(full);
   ASSERT_EQ(reader.frame_count(), 45);
   // The shot must exercise what resume has to carry: stuck contacts and sleep.
@@ -291,18 +308,7 @@ TEST_F(Bake, AResumeAfterAnyFrameGivesTheUninterruptedCacheBitForBit) {
   EXPECT_GT(stuck_frames, 0) << "no stuck contact in the shot";
   std::printf("tumble: %d of 45 frames with stuck contacts, at most %g bodies asleep\n", stuck_frames,
               *std::max_element(asleep.begin(), asleep.end()));
-  for (int k : {1, 2, 4, 7, 10, 13, 17, 21, 26, 33, 44}) {
-    const fs::path out = dir / ("cut" + std::to_string(k));
-    fs::create_directories(out);
-    {
-      io::CacheWriter w((out / "tumble.h5.partial").string(), scene, model, "test");
-      w.copy_frames_from(reader, k);
-      w.set_status(io::BakeStatus::kInterrupted);
-    }
-    ASSERT_EQ(sh(exe() + " --threads 1 bake " + scene_file + " -o " + out.string() + " --resume").code, 0) << k;
-    const Outcome d = sh(exe() + " diff --exact " + full + " " + (out / "tumble.h5").string());
-    EXPECT_EQ(d.code, 0) << "resumed after " << k << " frames:\n" << d.out;
-  }
+  expect_resumes_match(scene_file, scene, reader, full, "tumble.h5", {1, 2, 4, 7, 10, 13, 17, 21, 26, 33, 44});
 }
 
 // Joints (scene 1.1) are remade from the scene at every frame, like the world they live in:
@@ -314,21 +320,9 @@ TEST_F(Bake, AResumedShotWithJointsGivesTheUninterruptedCacheBitForBit) {
   const std::string full = (dir / "full/joints.h5").string();
   const scene::Scene scene = scene::load_scene(scene_file);
   ASSERT_EQ(scene.joints.size(), 5u);
-  const magnetics::Model model = scene::build_magnetics_model(scene);
   const io::CacheReader reader(full);
   ASSERT_EQ(reader.frame_count(), 40);
-  for (int k : {1, 9, 23, 38}) {
-    const fs::path out = dir / ("cut" + std::to_string(k));
-    fs::create_directories(out);
-    {
-      io::CacheWriter w((out / "joints.h5.partial").string(), scene, model, "test");
-      w.copy_frames_from(reader, k);
-      w.set_status(io::BakeStatus::kInterrupted);
-    }
-    ASSERT_EQ(sh(exe() + " --threads 1 bake " + scene_file + " -o " + out.string() + " --resume").code, 0) << k;
-    const Outcome d = sh(exe() + " diff --exact " + full + " " + (out / "joints.h5").string());
-    EXPECT_EQ(d.code, 0) << "resumed after " << k << " frames:\n" << d.out;
-  }
+  expect_resumes_match(scene_file, scene, reader, full, "joints.h5", {1, 9, 23, 38});
 }
 
 // Sleeping is in the cache: a bake interrupted while its magnets sleep resumes asleep (the
