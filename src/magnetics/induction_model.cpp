@@ -176,11 +176,38 @@ void build_induction_model(Model& m, const std::vector<const Solid*>& part_solid
   m.precond_lu.clear();
   m.precond_factor.clear();
   if (settings.induction_block <= 0) return;
+  // Bodies that are one block: up to induction_body_block cells, in body order while the
+  // distinct ones fit the budget. Bodies of equal layout (cells, their polarizabilities) get
+  // equal operators and share a factor below, so they count once here.
+  std::unordered_map<std::uint64_t, bool> layout_counted;
+  std::int64_t whole_bytes = 0;
+  auto layout_hash = [&](int r0, int r1) {
+    std::uint64_t h = 1469598103934665603ull ^ static_cast<std::uint64_t>(r1 - r0);
+    auto mix = [&](const double* v, int count) {
+      for (int k = 0; k < count; ++k) h = (h ^ std::bit_cast<std::uint64_t>(v[k])) * 1099511628211ull;
+    };
+    for (int r = r0; r < r1; ++r) {
+      const int c = m.induced_cells[r];
+      mix(m.cell_position[c].data(), 3);
+      mix(m.cell_half[c].data(), 3);
+      mix(m.cell_polarizability[c].data(), 9);
+    }
+    return h;
+  };
   for (int r = 0; r < nind;) {
     const int b = m.cell_body[m.induced_cells[r]];
     int end = r;
     while (end < nind && m.cell_body[m.induced_cells[end]] == b) ++end;
-    const int nb = (end - r + settings.induction_block - 1) / settings.induction_block;
+    int nb = (end - r + settings.induction_block - 1) / settings.induction_block;
+    if (nb > 1 && end - r <= settings.induction_body_block) {
+      const std::uint64_t key = layout_hash(r, end);
+      const std::int64_t bytes = layout_counted.count(key) ? 0 : 72 * std::int64_t(end - r) * (end - r);
+      if (whole_bytes + bytes <= settings.induction_block_bytes) {
+        whole_bytes += bytes;
+        layout_counted[key] = true;
+        nb = 1;
+      }
+    }
     for (int k = 0; k < nb; ++k) m.precond_begin.push_back(r + static_cast<int>((std::int64_t(end - r) * (k + 1)) / nb));
     r = end;
   }

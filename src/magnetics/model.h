@@ -44,8 +44,18 @@ struct BuildSettings {
   /// their cuboids in the induction solve (point dipoles beyond). 0 = point dipoles only.
   double induction_near = 2.0;
   /// Induced cells per block of the induction preconditioner (consecutive cells of one body,
-  /// hierarchy order; each block's operator is factored once). 0 = no preconditioner.
+  /// hierarchy order; each block's operator is factored once) where a body is not one block
+  /// (induction_body_block). 0 = no preconditioner.
   int induction_block = 512;
+  /// A body with at most this many induced cells is one preconditioner block, while the distinct
+  /// whole-body operators fit induction_block_bytes (bodies in index order; the others are split
+  /// into induction_block cells). Whole, a body's block holds its surface-charge modes: a steel
+  /// ball of 14 cells across (1,840 cells) cut into 512-cell blocks left GMRES(50) at residual
+  /// 7e-4 after 300 iterations in the paper's BowlSpheres; whole, it converged to 1e-6 in 84.
+  int induction_body_block = 2400;
+  /// Memory for the factors of the whole-body blocks, bytes (72 n^2 for a body of n cells;
+  /// bodies with equal operators share one).
+  std::int64_t induction_block_bytes = std::int64_t(1) << 30;
   /// A permanent part whose solid is a ball (Solid::ball) becomes one cell at its centre holding
   /// the ball's whole moment: exact, since a uniformly magnetized ball's field outside it is that
   /// of a point dipole, and the force and torque a field with its sources outside the ball exerts
