@@ -444,6 +444,7 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
   CellTable cells;
   PartTable parts;
   std::vector<const Solid*> part_solid;
+  std::vector<double> part_saturation;  // M_s, A/m
   std::vector<PartReport> reports;
   std::int64_t budget = settings.max_cells;
   parts.surface_begin.push_back(0);
@@ -518,10 +519,12 @@ Model build_model(const std::vector<BodySpec>& bodies, const BuildSettings& sett
       parts.surface_begin.push_back(static_cast<int>(parts.surface_vertex.size() / 3));
       reports.push_back(rep);
       part_solid.push_back(ps.solid);
+      part_saturation.push_back(ps.material.kind == MaterialKind::kLinear && chi > 0 ? ps.material.saturation / kMu0 : 0.0);
     }
   }
   Model m = model_from_cells(static_cast<int>(bodies.size()), cells, parts, settings.leaf_size);
   m.part_report = reports;
+  m.part_saturation = part_saturation;
   m.body_isotropic.assign(bodies.size(), 0);
   for (std::size_t b = 0; b < bodies.size(); ++b) m.body_isotropic[b] = bodies[b].isotropic && m.body_induced[b] && !m.body_permanent[b];
   build_induction_model(m, part_solid, settings);

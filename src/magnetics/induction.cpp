@@ -14,6 +14,9 @@ namespace {
 
 using Vector = Eigen::VectorXd;  // 3 x ntarget, target order
 
+// Newton iterations on a saturating magnetization law before the solve reports not converged.
+constexpr int kMaxNewtonIterations = 40;
+
 double dot(const Vector& a, const Vector& b) {
   double s = 0;  // serial, fixed order: bit-identical for any thread count
   for (Eigen::Index q = 0; q < a.size(); ++q) s += a[q] * b[q];
@@ -286,17 +289,22 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
   }
   load(shape);
   const FieldPlan plan = plan_field(m, s, s.induced, t, fopt);
-  auto apply = [&](const Vector& x, Vector& y) {
+  // The field of all other induced cells at each target for moments x (T, world frame), in B;
+  // then `use(q, B_q)` per target, in parallel (each writes only its own rows).
+  auto induced_field = [&](const Vector& x, auto&& use) {
     load(x);
     stats.field_pairs += apply_field_plan(plan, m, s, s.induced, t, fopt, B);
     to_body_frame(m, s, s.induced.cell, local);
-    y.resize(3 * n);
-    parallel_for_each(n, 256, [&](int q) {  // each target writes only its own rows of y
+    parallel_for_each(n, 256, [&](int q) {
       Vec3 Bq = B[q];
       add_body_near(m, s, q, t, local, [](int) { return false; }, Bq);
       for (int e = rows.begin[q]; e < rows.begin[q + 1]; ++e) Bq += rows.tensor[e] * s.induced.cell[rows.cell[e]];
-      y.segment<3>(3 * q) = x.segment<3>(3 * q) - alpha[q] * Bq;
+      use(q, Bq);
     });
+  };
+  auto apply = [&](const Vector& x, Vector& y) {
+    y.resize(3 * n);
+    induced_field(x, [&](int q, const Vec3& Bq) { y.segment<3>(3 * q) = x.segment<3>(3 * q) - alpha[q] * Bq; });
   };
 
   // Right preconditioner z = M^-1 v: each factored block (one body's consecutive induced cells,
@@ -323,73 +331,172 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
     });
   };
 
+  // Restarted GMRES (modified Gram–Schmidt, Givens rotations) for A x = rhs from x, to the
+  // relative residual tol; returns the iterations, sets the relative residual.
+  auto gmres = [&](const Vector& rhs, Vector& x, double tol, double& residual) {
+    const double rnorm = std::sqrt(dot(rhs, rhs));
+    const int restart = std::max(2, st.induction_restart);
+    std::vector<Vector> V(restart + 1);
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(restart + 1, restart);
+    Vector cs(restart), sn(restart), g(restart + 1), r, w, z;
+    apply(x, r);
+    r = rhs - r;
+    double beta = std::sqrt(dot(r, r));
+    residual = beta / rnorm;
+    int it = 0;
+    while (residual > tol && it < st.induction_max_iterations) {
+      V[0] = r / beta;
+      g.setZero();
+      g[0] = beta;
+      int j = 0;
+      while (j < restart && it < st.induction_max_iterations) {
+        apply_precond(V[j], z);
+        apply(z, w);
+        for (int i = 0; i <= j; ++i) {
+          H(i, j) = dot(w, V[i]);
+          w -= H(i, j) * V[i];
+        }
+        H(j + 1, j) = std::sqrt(dot(w, w));
+        if (H(j + 1, j) > 0) V[j + 1] = w / H(j + 1, j);
+        for (int i = 0; i < j; ++i) {
+          const double h0 = cs[i] * H(i, j) + sn[i] * H(i + 1, j);
+          H(i + 1, j) = -sn[i] * H(i, j) + cs[i] * H(i + 1, j);
+          H(i, j) = h0;
+        }
+        const double den = std::hypot(H(j, j), H(j + 1, j));
+        cs[j] = H(j, j) / den;
+        sn[j] = H(j + 1, j) / den;
+        H(j, j) = den;
+        H(j + 1, j) = 0;
+        g[j + 1] = -sn[j] * g[j];
+        g[j] = cs[j] * g[j];
+        ++j, ++it;
+        if (std::abs(g[j]) / rnorm <= tol) break;
+      }
+      // x += M^-1 V y with H y = g (upper triangular, j x j).
+      const Vector y = H.topLeftCorner(j, j).triangularView<Eigen::Upper>().solve(g.head(j));
+      Vector u = Vector::Zero(3 * n);
+      for (int i = 0; i < j; ++i) u += y[i] * V[i];
+      apply_precond(u, z);
+      x += z;
+      // Converged by GMRES's own residual (|g[j]| is |b - A x| of the updated x, up to round-off):
+      // no application to confirm it. Otherwise the restart needs the residual anyway.
+      if (std::abs(g[j]) / rnorm <= tol) {
+        residual = std::abs(g[j]) / rnorm;
+        break;
+      }
+      apply(x, r);
+      r = rhs - r;
+      beta = std::sqrt(dot(r, r));
+      residual = beta / rnorm;
+      if (beta == 0.0) break;
+    }
+    return it;
+  };
+
   // Warm start from the previous moments (world frame) when they exist, else from the one-pass
   // answer.
   Vector x(3 * n);
   const bool warm = s.induced_moment.size() == m.induced_cells.size();
   for (int q = 0; q < n && warm; ++q) x.segment<3>(3 * q) = s.induced_moment[t.original[q]];
-  if (!warm || dot(x, x) == 0.0) x = b;
+  const bool cold = !warm || dot(x, x) == 0.0;
+  if (cold) x = b;
 
-  // Restarted GMRES (modified Gram–Schmidt, Givens rotations).
-  const int restart = std::max(2, st.induction_restart);
-  std::vector<Vector> V(restart + 1);
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(restart + 1, restart);
-  Vector cs(restart), sn(restart), g(restart + 1), r, w, z;
-  apply(x, r);
-  r = b - r;
-  double beta = std::sqrt(dot(r, r));
-  rep.residual = beta / bnorm;
-  int it = 0;
-  while (rep.residual > st.induction_tolerance && it < st.induction_max_iterations) {
-    V[0] = r / beta;
-    g.setZero();
-    g[0] = beta;
-    int j = 0;
-    while (j < restart && it < st.induction_max_iterations) {
-      apply_precond(V[j], z);
-      apply(z, w);
-      for (int i = 0; i <= j; ++i) {
-        H(i, j) = dot(w, V[i]);
-        w -= H(i, j) * V[i];
-      }
-      H(j + 1, j) = std::sqrt(dot(w, w));
-      if (H(j + 1, j) > 0) V[j + 1] = w / H(j + 1, j);
-      for (int i = 0; i < j; ++i) {
-        const double h0 = cs[i] * H(i, j) + sn[i] * H(i + 1, j);
-        H(i + 1, j) = -sn[i] * H(i, j) + cs[i] * H(i + 1, j);
-        H(i, j) = h0;
-      }
-      const double den = std::hypot(H(j, j), H(j + 1, j));
-      cs[j] = H(j, j) / den;
-      sn[j] = H(j + 1, j) / den;
-      H(j, j) = den;
-      H(j + 1, j) = 0;
-      g[j + 1] = -sn[j] * g[j];
-      g[j] = cs[j] * g[j];
-      ++j, ++it;
-      if (std::abs(g[j]) / bnorm <= st.induction_tolerance) break;
+  // Saturating cells (Fröhlich–Kennelly, physics.md §15).
+  std::vector<int> sat;  // target indices
+  if (!m.part_saturation.empty()) {
+    for (int q = 0; q < n; ++q) {
+      if (m.part_saturation[m.cell_part[t.cell[q]]] > 0) sat.push_back(q);
     }
-    // x += M^-1 V y with H y = g (upper triangular, j x j).
-    const Vector y = H.topLeftCorner(j, j).triangularView<Eigen::Upper>().solve(g.head(j));
-    Vector u = Vector::Zero(3 * n);
-    for (int i = 0; i < j; ++i) u += y[i] * V[i];
-    apply_precond(u, z);
-    x += z;
-    // Converged by GMRES's own residual (|g[j]| is |b - A x| of the updated x, up to round-off):
-    // no application to confirm it. Otherwise the restart needs the residual anyway.
-    if (std::abs(g[j]) / bnorm <= st.induction_tolerance) {
-      rep.residual = std::abs(g[j]) / bnorm;
+  }
+  if (sat.empty()) {
+    rep.iterations = gmres(b, x, st.induction_tolerance, rep.residual);
+    rep.converged = rep.residual <= st.induction_tolerance;
+    store(x);
+    return rep;
+  }
+
+  // Newton's method on the magnetization law: at each saturating cell the law is linearized at
+  // the cell's field H_k, M = J H + M_r with the tangent J = dM/dH and M_r = M(H_k) - J H_k, and
+  // the coupled linear system with that law is solved by GMRES (warm-started from the last
+  // moments). The cell's new field follows from its law, H = J^-1 (M - M_r); Newton stops when
+  // M(H) matches M. The first linearization is at the field the warm-start moments imply (at
+  // H = 0, the linear law, when there are none).
+  const int ns = static_cast<int>(sat.size());
+  std::vector<Vec3> Hk(ns), Mr(ns);
+  std::vector<Mat3> J(ns), Nw(ns);
+  std::vector<double> chi(ns), ms(ns), vol(ns);
+  for (int k = 0; k < ns; ++k) {
+    const int c = t.cell[sat[k]];
+    const Mat3& R = s.body_rotation[m.cell_body[c]];
+    chi[k] = m.cell_chi[c];
+    ms[k] = m.part_saturation[m.cell_part[c]];
+    vol[k] = m.cell_volume[c];
+    Nw[k] = R * m.cell_demag[c] * R.transpose();
+    Vec3 M0 = cold ? Vec3::Zero() : Vec3(x.segment<3>(3 * sat[k]) / vol[k]);
+    if (M0.norm() > 0.99 * ms[k]) M0 *= 0.99 * ms[k] / M0.norm();
+    Hk[k] = frohlich_kennelly_inverse(M0, chi[k], ms[k]);
+  }
+  auto linearize = [&](int k) {
+    const double h = Hk[k].norm();
+    const double c = chi[k] / (1.0 + chi[k] * h / ms[k]);  // secant susceptibility |M| / |H|
+    J[k] = c * Mat3::Identity();
+    if (h > 0) {
+      const Vec3 u = Hk[k] / h;
+      J[k] += (c * c / chi[k] - c) * u * u.transpose();  // along H the slope is c^2 / chi
+    }
+    Mr[k] = c * Hk[k] - J[k] * Hk[k];
+    const Mat3 K = (Mat3::Identity() + J[k] * Nw[k]).inverse();
+    const int q = sat[k];
+    alpha[q] = vol[k] * K * J[k] / kMu0;
+    b.segment<3>(3 * q) = alpha[q] * B0[q] + vol[k] * K * Mr[k];
+  };
+  // Relative mismatch of the law, |M - M(H)| / |M| over the saturating cells, and their new
+  // fields by the linearized law, H = J^-1 (M - M_r). (Not from the field, B_loc / mu0 - N M:
+  // at high chi that difference of near-equal terms magnifies the linear solve's error by chi.)
+  std::vector<Vec3> Hnew(ns);
+  auto mismatch = [&]() {
+    double num = 0, den = 0;
+    for (int k = 0; k < ns; ++k) {
+      const Vec3 M = x.segment<3>(3 * sat[k]) / vol[k];
+      Hnew[k] = J[k].inverse() * (M - Mr[k]);
+      num += (M - frohlich_kennelly(Hnew[k], chi[k], ms[k])).squaredNorm() * vol[k];
+      den += M.squaredNorm() * vol[k];
+    }
+    return den > 0 ? std::sqrt(num / den) : 0.0;
+  };
+  const double law_tolerance = 10.0 * st.induction_tolerance;
+  double last = INFINITY, step = 1.0;
+  rep.converged = false;
+  for (int newton = 0; newton < kMaxNewtonIterations; ++newton) {
+    for (int k = 0; k < ns; ++k) linearize(k);
+    // Every step's linear solve to the tolerance: the new fields come from the linearized law,
+    // whose inverse slope along H (chi / c^2) magnifies a looser solve's error in deep saturation
+    // (an inexact Newton with Eisenstat and Walker's forcing term diverged there).
+    double residual = 0;
+    rep.iterations += gmres(b, x, st.induction_tolerance, residual);
+    rep.residual = residual;
+    rep.nonlinear_iterations = newton + 1;
+    rep.nonlinear_residual = mismatch();
+    if (rep.nonlinear_residual <= law_tolerance) {
+      rep.converged = residual <= st.induction_tolerance;
       break;
     }
-    apply(x, r);
-    r = b - r;
-    beta = std::sqrt(dot(r, r));
-    rep.residual = beta / bnorm;
-    if (beta == 0.0) break;
+    // Damped when the mismatch grows (a step past the knee of the law), restored as it shrinks.
+    step = rep.nonlinear_residual < last ? std::min(1.0, 2.0 * step) : std::max(step / 2.0, 1.0 / 16.0);
+    last = rep.nonlinear_residual;
+    for (int k = 0; k < ns; ++k) Hk[k] += step * (Hnew[k] - Hk[k]);
   }
-  rep.iterations = it;
-  rep.converged = rep.residual <= st.induction_tolerance;
   store(x);
+  // Energy: the moments minimize sum_i v psi(M_i) + (their mutual and self-field energy) -
+  // sum_i m_i.B0_i, psi the law's stored energy (mu0 H = dpsi/dM). At the minimum that is
+  // -1/2 sum m.B0 + sum_i v (psi(M_i) - mu0 M_i.H_i / 2): nothing more for a linear law; for
+  // Fröhlich–Kennelly, with s = |M| / M_s, psi = mu0 M_s^2 / chi (-s - ln(1 - s)) and
+  // mu0 M.H / 2 = mu0 M_s^2 / chi s^2 / (2 (1 - s)) (physics.md §15).
+  for (int k = 0; k < ns; ++k) {
+    const double sk = std::min(x.segment<3>(3 * sat[k]).norm() / (vol[k] * ms[k]), 1.0 - 1e-12);
+    rep.energy += vol[k] * kMu0 * ms[k] * ms[k] / chi[k] * (-sk - std::log1p(-sk) - sk * sk / (2.0 * (1.0 - sk)));
+  }
   return rep;
 }
 

@@ -78,6 +78,7 @@ void build_induction_model(Model& m, const std::vector<const Solid*>& part_solid
   const int nind = static_cast<int>(m.induced_cells.size());
   m.induction_near = settings.induction_near;
   m.cell_polarizability.assign(m.cell_count(), Mat3::Zero());
+  m.cell_demag.assign(m.cell_count(), Mat3::Zero());
   m.near_begin.assign(nind + 1, 0);
   m.near_cell.clear();
   m.near_tensor.clear();
@@ -165,6 +166,7 @@ void build_induction_model(Model& m, const std::vector<const Solid*>& part_solid
         N = R * D * R.transpose() + S / kMu0;
       }
       // M = chi (H_loc - N M)  =>  m = v (1 + chi N)^-1 chi H_loc.
+      m.cell_demag[i] = N;
       m.cell_polarizability[i] = m.cell_volume[i] * chi * (Mat3::Identity() + chi * N).inverse();
     });
   }

@@ -111,6 +111,9 @@ struct Model {
   std::vector<Mat3> part_rotation;       ///< part frame -> body frame (cell cuboid axes)
   std::vector<Vec3> part_magnetization;  ///< permanent M in the body frame, A/m (0 if induced)
   std::vector<double> part_chi;          ///< susceptibility (0 for permanent and none)
+  /// Saturation magnetization M_s, A/m (Material::saturation / mu0); 0 = linear. Empty for a
+  /// model read back from a cache (its moments are stored, not solved).
+  std::vector<double> part_saturation;
   std::vector<Vec3> part_half;           ///< half-edges of the part's cells, part frame, m
   std::vector<std::uint8_t> part_consistent;  ///< induced part whose cells are corrected to be
                                          ///< exact for uniform magnetization (its solid has demag_tensor)
@@ -149,6 +152,10 @@ struct Model {
   std::vector<double> cell_chi;          ///< (ncell) susceptibility of the cell's material; 0 if not induced
   std::vector<Mat3> cell_polarizability; ///< (ncell x 3 x 3) body frame, m³: m = P B_loc / mu0, with
                                          ///< B_loc the field of all other cells (+ near corrections)
+  /// (ncell x 3 x 3) body frame, dimensionless: the cell's own demagnetizing tensor N (its mean
+  /// field is -N M from its own M, corrected to be exact for a uniformly magnetized part), of
+  /// which cell_polarizability = v chi (1 + chi N)^-1. Zero for cells that are not induced.
+  std::vector<Mat3> cell_demag;
   std::vector<Vec3> cell_half;           ///< (ncell x 3) half-edges of the cuboid cell, part frame, m
   std::vector<double> cell_reach;        ///< (ncell) radius of the cell's bounding sphere, m
   std::vector<double> cell_clamp;        ///< (ncell) half of the closest approach of two cells, m

@@ -53,9 +53,14 @@ struct Settings {
 
 /// Outcome of the induced-magnetization solve.
 struct InductionReport {
-  int iterations = 0;      ///< Krylov iterations (0 when no solve ran; 1 for paper mode)
-  double residual = 0.0;   ///< final relative residual |b - A x| / |b|
-  bool converged = true;
+  int iterations = 0;      ///< Krylov iterations (0 when no solve ran; 1 for paper mode), all
+                           ///< Newton steps together
+  double residual = 0.0;   ///< final relative residual |b - A x| / |b| (of the last linear solve)
+  bool converged = true;   ///< the linear solve, and the saturation law when there is one
+  /// Saturating materials (Material::saturation): Newton steps on the law (0 without them) and
+  /// the final relative mismatch |M - M(H)| / |M| over their cells (volume-weighted RMS).
+  int nonlinear_iterations = 0;
+  double nonlinear_residual = 0.0;
   /// Energy of the induced moments in the field B_0 of the permanent cells and the applied
   /// field, -1/2 sum m_ind . B_0 (J): the total magnetic energy of linear induced matter,
   /// induced-induced coupling included (physics.md §8).

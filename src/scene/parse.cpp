@@ -354,13 +354,14 @@ SceneSpec parse_scene_text(const std::string& text, const std::string& file, Dia
       m.loc = loc_of(kv.first);
       const std::string kp = "materials." + m.name;
       const YAML::Node& v = kv.second;
-      if (!r.mapping(v, kp, {"kind", "remanence", "chi", "density", "friction", "restitution", "damping", "color"},
+      if (!r.mapping(v, kp, {"kind", "remanence", "chi", "saturation", "density", "friction", "restitution", "damping", "color"},
                      {"kind"}, m.loc)) {
         continue;
       }
       m.kind = r.text(v, "kind", kp);
       m.remanence = r.number(v, "remanence", kp);
       m.chi = r.number(v, "chi", kp);
+      m.saturation = r.number(v, "saturation", kp);
       m.density = r.number(v, "density", kp);
       m.friction = r.number(v, "friction", kp);
       m.restitution = r.number(v, "restitution", kp);

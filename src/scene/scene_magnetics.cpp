@@ -71,6 +71,7 @@ magnetics::Model build_magnetics_model(const Scene& sc) {
       p.material.kind = m.kind;
       p.material.remanence = m.remanence;
       p.material.chi = m.chi;
+      p.material.saturation = m.saturation;
       // The scene gives magnetization in the body frame; the library wants the part frame.
       if (m.kind == magnetics::MaterialKind::kPermanent) p.material.direction = part_pose.rotation.conjugate() * magnetization;
       p.cell_size = part_cell_size(sc, shape, m);

@@ -84,7 +84,7 @@ struct MaterialSpecS {
   Loc loc;
   std::string name;
   Val<std::string> kind;
-  Val<double> remanence, chi, density;
+  Val<double> remanence, chi, saturation, density;
   Val<double> friction, restitution;
   DampingSpec damping;
   Val<Vec> color;

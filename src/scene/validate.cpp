@@ -633,6 +633,19 @@ Scene validate_scene(const SceneSpec& s, Diagnostics& d) {
       if (ms.chi.set && m.kind != magnetics::MaterialKind::kLinear) {
         d.add(ms.chi.loc, mp + ".chi", "only soft and linear materials have a susceptibility");
       }
+      if (ms.saturation.set) {
+        if (m.kind != magnetics::MaterialKind::kLinear) {
+          d.add(ms.saturation.loc, mp + ".saturation", "only soft and linear materials saturate");
+        } else if (ms.chi.set && !(ms.chi.v > 0)) {
+          d.add(ms.saturation.loc, mp + ".saturation", "only a material with chi > 0 saturates");
+        } else if (sc.magnetics.induction == "paper") {
+          d.add(ms.saturation.loc, mp + ".saturation",
+                "saturation needs magnetics.induction: coupled (the paper's one-pass induction is linear)");
+        } else if (positive(c, ms.saturation, mp + ".saturation", "saturation polarization in tesla") &&
+                   within(c, ms.saturation, mp + ".saturation", kMaxFieldTesla, 1, "T")) {
+          m.saturation = ms.saturation.v;
+        }
+      }
     }
     if (ms.density.set && positive(c, ms.density, mp + ".density", "density in kg/m³") &&
         within(c, ms.density, mp + ".density", kMaxDensity, 1, "kg/m³")) {
