@@ -68,6 +68,7 @@ std::string scene_summary(const scene::Scene& s, bool all_bodies) {
     os << "  " << mt.name << " (" << mt.kind_name;
     if (mt.kind == magnetics::MaterialKind::kPermanent) os << ", " << mt.remanence << " T";
     if (mt.kind == magnetics::MaterialKind::kLinear) os << ", chi " << mt.chi;
+    if (mt.saturation > 0) os << ", saturates at " << mt.saturation << " T";
     os << ")";
   }
   os << "\nbodies   " << s.bodies.size() << "\n";
@@ -138,6 +139,7 @@ nlohmann::json scene_summary_json(const scene::Scene& s) {
     json o = {{"name", mt.name}, {"kind", mt.kind_name}};
     if (mt.kind == magnetics::MaterialKind::kPermanent) o["remanence_T"] = mt.remanence;
     if (mt.kind == magnetics::MaterialKind::kLinear || mt.kind == magnetics::MaterialKind::kSuperconductor) o["chi"] = mt.chi;
+    if (mt.saturation > 0) o["saturation_T"] = mt.saturation;
     if (mt.density) o["density"] = *mt.density;
     if (mt.friction) o["friction"] = *mt.friction;
     if (mt.restitution) o["restitution"] = *mt.restitution;

@@ -186,6 +186,10 @@ int cmd_eval(const std::string& path, double time, bool json, const Global&) {
     out["induction"] = {{"iterations", r.induction.iterations},
                         {"residual", r.induction.residual},
                         {"converged", r.induction.converged}};
+    if (r.induction.nonlinear_iterations > 0) {  // saturating materials (physics.md §13)
+      out["induction"]["nonlinear_iterations"] = r.induction.nonlinear_iterations;
+      out["induction"]["nonlinear_residual"] = r.induction.nonlinear_residual;
+    }
     out["energy"] = r.energy;
     out["stats"] = {{"cell_pairs", r.stats.cell_pairs},
                     {"node_pairs", r.stats.node_pairs},

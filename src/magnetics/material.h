@@ -21,7 +21,7 @@ struct Material {
   double chi = 0.0;                ///< volume susceptibility, dimensionless (kLinear; -1 for kSuperconductor)
   /// Saturation polarization J_s = mu0 M_s, tesla (kLinear with chi > 0); 0 = linear at any
   /// field. With it, M follows the Fröhlich–Kennelly law M = chi H / (1 + chi |H| / M_s)
-  /// (physics.md §15).
+  /// (physics.md §13).
   double saturation = 0.0;
 
   /// True when cells of this material carry an induced moment.

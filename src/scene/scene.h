@@ -29,7 +29,7 @@ struct Material {
   double remanence = 0;           ///< T (permanent)
   double chi = 0;                 ///< susceptibility (soft, linear; -1 for superconductor)
   /// Saturation polarization J_s, T (format 1.1; soft and linear with chi > 0): M(H) follows the
-  /// Fröhlich–Kennelly law (physics.md §15). 0 = linear at any field.
+  /// Fröhlich–Kennelly law (physics.md §13). 0 = linear at any field.
   double saturation = 0;
   std::optional<double> density;  ///< kg/m³
   /// Format 1.1 defaults for the bodies made of this material (a body's own key wins).

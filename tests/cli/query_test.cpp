@@ -83,6 +83,36 @@ TEST(EvalCommand, SoftSphereInFieldHasTheExactMoment) {
   EXPECT_LT(j["induction"]["residual"].get<double>(), 1e-4);  // the default preset's induction tolerance
 }
 
+// The saturating-steel example (format 1.1) as its comment states it: at 2 mm from its magnet
+// the linear ball's weight (6.55 N) is lifted and the saturating one's is not; eval --json
+// reports the Newton steps, check --json the material's saturation.
+TEST(EvalCommand, SaturatingSteelExampleHoldsWhatItsCommentSays) {
+  const Outcome r = magbake("eval " + scene("format11/saturating_steel.yaml") + " --time 1.5 --json");
+  ASSERT_EQ(r.code, 0);
+  const auto j = nlohmann::json::parse(r.out);
+  double linear = 0, saturating = 0;
+  for (const auto& b : j["bodies"]) {
+    if (b["name"] == "weight_linear") linear = vec(b["force"])[2];
+    if (b["name"] == "weight_saturating") saturating = vec(b["force"])[2];
+  }
+  const double weight = 0.6676 * 9.81;  // brass cylinder, radius 25 mm, height 40 mm, 8500 kg/m^3
+  std::printf("pull at 2 mm: linear %.2f N, saturating %.2f N, weight %.2f N\n", linear, saturating, weight);
+  EXPECT_GT(linear, weight);
+  EXPECT_LT(saturating, 0.9 * weight);
+  EXPECT_TRUE(j["induction"]["converged"].get<bool>());
+  EXPECT_GE(j["induction"]["nonlinear_iterations"].get<int>(), 1);
+  EXPECT_LT(j["induction"]["nonlinear_residual"].get<double>(), 1e-3);  // 10 x the default tolerance
+
+  const Outcome c = magbake("check " + scene("format11/saturating_steel.yaml") + " --json --trial 0");
+  ASSERT_EQ(c.code, 0);
+  const auto cj = nlohmann::json::parse(c.out);
+  bool found = false;
+  for (const auto& m : cj["materials"]) {
+    if (m["name"] == "ferrite") found = m["saturation_T"].get<double>() == 0.4;
+  }
+  EXPECT_TRUE(found) << c.out;
+}
+
 TEST(EvalAndProbe, DipolePairMatchesPointDipoles) {
   const double mu0 = 4e-7 * std::acos(-1.0);
   const double m = 1.2 / mu0 * 4.0 / 3.0 * std::acos(-1.0) * 8e-9;

@@ -1,4 +1,4 @@
-// Saturating soft materials (Fröhlich–Kennelly law, physics.md §15) against closed forms.
+// Saturating soft materials (Fröhlich–Kennelly law, physics.md §13) against closed forms.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -129,7 +129,7 @@ TEST(Saturation, SteelBallOnAStrongMagnetHasABoundedForce) {
   }
 }
 
-// The reported energy of saturating matter (physics.md §15: -1/2 m.B0 plus the law's stored
+// The reported energy of saturating matter (physics.md §13: -1/2 m.B0 plus the law's stored
 // energy less mu0 M.H / 2 per cell) is the potential of the force, by central differences: a
 // steel sphere (J_s 0.6 T) beside a magnet, from nearly linear to nearly saturated (measured:
 // within 1e-5 of the force; a per-cell charging estimate, -g(a) m.B0, was 5-42% off).

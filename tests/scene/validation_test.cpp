@@ -218,6 +218,33 @@ TEST(SceneValidation, DampingAndColourOfTheWrongShape) {
   EXPECT_TRUE(has(d, 8, 83, "expected a list of 3 numbers"));
 }
 
+// Saturation (format 1.1): only soft and linear materials with chi > 0, a positive polarization
+// up to 100 T, and the coupled induction; each mistake at its value.
+TEST(SceneValidation, SaturationIsChecked) {
+  const std::string materials =
+      "materials:\n"
+      "  N42: {kind: permanent, remanence: 1.3, density: 7500, saturation: 1.0}\n"
+      "  copper: {kind: linear, chi: -1.0e-5, density: 8960, saturation: 1.0}\n"
+      "  steel: {kind: soft, chi: 700, density: 7850, saturation: -2}\n"
+      "  iron: {kind: soft, chi: 700, density: 7850, saturation: 200}\n"
+      "  ferrite: {kind: soft, chi: 2000, density: 4800, saturation: 0.4}\n"
+      "bodies:\n"
+      "  - {name: a, shape: {sphere: {radius: 2}}, material: ferrite}\n";
+  const Diagnostics d = problems("magbake: 1.1\nunits: {length: mm, angle: deg}\n" + materials);
+  EXPECT_TRUE(has(d, 4, 69, "only soft and linear materials saturate")) << d.format();
+  EXPECT_TRUE(has(d, 5, 67, "only a material with chi > 0 saturates"));
+  EXPECT_TRUE(has(d, 6, 60, "must be a positive saturation polarization in tesla"));
+  EXPECT_TRUE(has(d, 7, 59, "materials.iron.saturation"));
+  EXPECT_EQ(d.items().size(), 4u) << d.format();
+
+  const Diagnostics paper = problems(
+      "magbake: 1.1\nunits: {length: mm, angle: deg}\nmagnetics: {induction: paper}\n"
+      "materials:\n  ferrite: {kind: soft, chi: 2000, density: 4800, saturation: 0.4}\n"
+      "bodies:\n  - {name: a, shape: {sphere: {radius: 2}}, material: ferrite}\n");
+  EXPECT_TRUE(has(paper, 5, 63, "saturation needs magnetics.induction: coupled")) << paper.format();
+  EXPECT_EQ(paper.items().size(), 1u) << paper.format();
+}
+
 // Joints (format 1.1): every mistake at its file:line:col.
 TEST(SceneValidation, JointsAreCheckedAtTheirPositions) {
   const Diagnostics d = problems(
