@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <vector>
 
 #include "cuboid.h"
@@ -24,21 +23,6 @@ double dot(const Vector& a, const Vector& b) {
   return s;
 }
 
-// Closest approach (m) at which a boundary cell t and a cell j of another body see each other in
-// the induction operator: their clamp (half-edges, as in the force kernels), and no closer than
-// where the pair's loop gain through the dipole tensor, |P_t| |T| |P_j| |T| with |T| = 2 / (4 pi
-// d^3) per mu0, reaches 1/16 (d^3 = 4 sqrt(|P_t| |P_j|) / pi; P Frobenius norms, m^3). A boundary
-// cell holding a sliver of steel can get a polarizability far above a full cell's (its
-// shape-consistent self-field is weak), and two such cells across a contact made the operator
-// nearly singular: in BowlSpheres at the high preset one cell got 3e9 A/m and two touching balls
-// pushed each other with 700 kN. A bound of 1/4 still let one cell reach 1.1e7 A/m through its
-// several neighbours across the contact, and the pair's force then depended on theta (7 and 20 N
-// at 0.3 and 0.5); at 1/16 the largest cell holds 1.8e6 A/m and theta 0.3 and 0.5 agree within 5%.
-double cross_clamp(const Model& m, int t, int j) {
-  const double pt = m.cell_polarizability[t].norm(), pj = m.cell_polarizability[j].norm();
-  return std::max(m.cell_clamp[t] + m.cell_clamp[j], std::cbrt(4.0 * std::sqrt(pt * pj) / std::numbers::pi));
-}
-
 // Correction (mean field - point dipole) for target cell t and a source cell j of another body,
 // world frame: their cuboids are arbitrarily placed, so the mean field comes from quadrature.
 Mat3 cross_body_tensor(const Model& m, const Settings& st, const State& s, int t, int j) {
@@ -55,7 +39,7 @@ Mat3 cross_body_tensor(const Model& m, const Settings& st, const State& s, int t
     // kernels: its cuboid reaches outside the body, and the cuboids of two touching bodies
     // overlap, where their mean field (the inside field, -M/3) made the pair's induction
     // nearly singular (two steel balls in contact got 1e8 A/m and 15 kN, physics.md §7).
-    const double d_min = cross_clamp(m, t, j);
+    const double d_min = m.cell_clamp[t] + m.cell_clamp[j];
     const double d = r.norm();
     return d < d_min ? Mat3(dipole_tensor(r * (d_min / d)) - dipole_tensor(r)) : Mat3(Mat3::Zero());
   }
@@ -121,7 +105,7 @@ void build_near_rows(const Model& m, const Settings& st, State& s) {
             // boundary cell only its clamp (cross_body_tensor).
             const double lim = m.cell_full[tc] && m.cell_full[c]
                                    ? m.induction_near * (m.cell_half[tc].maxCoeff() + m.cell_half[c].maxCoeff())
-                                   : cross_clamp(m, tc, c);
+                                   : m.cell_clamp[tc] + m.cell_clamp[c];
             if ((origin + s.cell_offset[c] - t.position[q]).squaredNorm() < lim * lim) cross[q].push_back(c);
           }
         }
