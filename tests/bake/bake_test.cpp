@@ -325,6 +325,20 @@ TEST_F(Bake, AResumedShotWithJointsGivesTheUninterruptedCacheBitForBit) {
   expect_resumes_match(scene_file, scene, reader, full, "joints.h5", {1, 9, 23, 38});
 }
 
+// Saturation (scene 1.1): each evaluation's Newton steps start from the moments in the state
+// (the cache's induced moments), so a resumed bake of saturating balls falling onto magnets and
+// touching them gives the uninterrupted cache bit for bit.
+TEST_F(Bake, AResumedShotWithSaturatingSteelGivesTheUninterruptedCacheBitForBit) {
+  const std::string scene_file = src("tests/data/resume_saturation.yaml");
+  ASSERT_EQ(bake(scene_file, "full", "--threads 2").code, 0);
+  const std::string full = (dir / "full/saturation.h5").string();
+  const scene::Scene scene = scene::load_scene(scene_file);
+  ASSERT_EQ(scene.materials[2].saturation, 0.4);
+  const io::CacheReader reader(full);
+  ASSERT_EQ(reader.frame_count(), 30);
+  expect_resumes_match(scene_file, scene, reader, full, "saturation.h5", {1, 9, 23});
+}
+
 // Sleeping is in the cache: a bake interrupted while its magnets sleep resumes asleep (the
 // cache's /particles/bodies/sleep and sleep_reference), so later frames are the uninterrupted
 // bake's (positions bit for bit). (Resumed awake, the chain would chatter at ~30 um/s and take 240 substeps a
