@@ -14,7 +14,8 @@ types=("$@")
 [ ${#types[@]} -gt 0 ] || types=(Release Debug)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-scenes=(tests/golden/magnets_in_space.yaml tests/golden/sphere_pickup.yaml scenes/demo.yaml)
+# resume_saturation: the saturating law's Newton steps (scene 1.1), contacts included.
+scenes=(tests/golden/magnets_in_space.yaml tests/golden/sphere_pickup.yaml scenes/demo.yaml tests/data/resume_saturation.yaml)
 bake() {  # exe name scene
   "$1" -q --threads 2 bake "$3" -o "$work/$2" --cache-only >/dev/null
 }
