@@ -460,6 +460,10 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
     for (int k = 0; k < ns; ++k) {
       const Vec3 M = x.segment<3>(3 * sat[k]) / vol[k];
       Hnew[k] = J[k].inverse() * (M - Mr[k]);
+      // Deep in saturation the law is flat and its inverse meaningless: |H| is capped where
+      // |M(H)| = M_s (1 - 1e-6), so that no H runs off to infinity (and c, J to zero).
+      const double hmax = 1e6 * ms[k] / chi[k], h = Hnew[k].norm();
+      if (!(h <= hmax)) Hnew[k] = h > 0 && std::isfinite(h) ? Vec3(Hnew[k] * (hmax / h)) : Vec3(M.normalized() * hmax);
       num += (M - frohlich_kennelly(Hnew[k], chi[k], ms[k])).squaredNorm() * vol[k];
       den += M.squaredNorm() * vol[k];
     }
@@ -495,6 +499,16 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
   // psi - mu0 M.H / 2 = mu0 M_s^2 / chi (ln(1 + a) - a / (1 + a) - a^2 / (2 (1 + a))) (physics.md
   // §13). In terms of the cell's field, not of |M| / M_s: a linearized step can leave |M| a hair
   // above M_s, where the same expression in |M| / M_s has no value (a bake's energy read 3e6 J).
+  // Near saturation the cell's field comes from the field itself, B_loc / mu0 - N M (the law's
+  // inverse there magnifies the solve's error without bound); below half of M_s from the law.
+  std::vector<int> sat_index(n, -1);
+  for (int k = 0; k < ns; ++k) sat_index[sat[k]] = k;
+  induced_field(x, [&](int q, const Vec3& Bq) {
+    const int k = sat_index[q];
+    if (k < 0) return;
+    const Vec3 M = x.segment<3>(3 * q) / vol[k];
+    if (M.norm() >= 0.5 * ms[k]) Hnew[k] = (B0[q] + Bq) / kMu0 - Nw[k] * M;
+  });
   for (int k = 0; k < ns; ++k) {
     const double a = chi[k] * Hnew[k].norm() / ms[k];
     rep.energy += vol[k] * kMu0 * ms[k] * ms[k] / chi[k] * (std::log1p(a) - a / (1.0 + a) - a * a / (2.0 * (1.0 + a)));
