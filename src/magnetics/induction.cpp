@@ -24,20 +24,21 @@ double dot(const Vector& a, const Vector& b) {
   return s;
 }
 
-// Clamp distance of cells t and j in the induction's coupling across bodies, m. Two boundary cells (point
-// dipoles at their material's centroids) are taken as balls of their material's volume: a ball's
-// outside field is exactly its dipole's, and a field's mean over a ball is its value at the
-// centre, so the clamped dipole pair is the mean field of one ball over the other, exact while
-// they are apart and bounded when they overlap. With the lattice clamp (half a cell edge
-// whatever the cell holds) a cluster of touching steel balls at 14 cells across had a coupled
-// mode with a gain near 1: one boundary cell at 3.2e9 A/m, the balls pushing each other with
-// 450 kN (physics.md §7). A pair with a full cell or an exact ball keeps the force kernels'
-// clamp (the sum of the cells' clamps).
+// Clamp distance of cells t and j in the induction's coupling across bodies, m. A boundary cell
+// is a point dipole at its material's centroid; taken as a ball of its material's volume, whose
+// outside field is exactly its dipole's (and the mean of a field over a ball is its value at the
+// centre), a pair of them is the exact mean field of one ball over the other while the balls are
+// apart. The lattice clamp (half the smallest edge per cell) let two boundary cells that hold
+// more than half of their cuboids come closer than their balls allow: at 14 cells across two
+// touching steel balls then had a coupled mode with a gain near 1 (one cell at 1.3e10 A/m, 2.3e7
+// N; in the paper's BowlSpheres at `high` 450 kN, physics.md §7). Two boundary cells are
+// therefore clamped at the larger of the two distances; a pair with a full cell or an exact
+// ball keeps the lattice clamp, as in the force kernels.
 double cross_clamp(const Model& m, int t, int j) {
   auto boundary = [&](int c) { return !m.cell_full[c] && !m.cell_ball[c]; };
   if (!boundary(t) || !boundary(j)) return m.cell_clamp[t] + m.cell_clamp[j];
   const double k = 3.0 / (4.0 * std::numbers::pi);
-  return std::cbrt(k * m.cell_volume[t]) + std::cbrt(k * m.cell_volume[j]);
+  return std::max(m.cell_clamp[t] + m.cell_clamp[j], std::cbrt(k * m.cell_volume[t]) + std::cbrt(k * m.cell_volume[j]));
 }
 
 // Correction (mean field - point dipole) for target cell t and a source cell j of another body,
