@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <numbers>
 #include <cstdio>
 #include <functional>
 #include <numeric>
@@ -398,6 +399,7 @@ Model model_from_cells(int body_count, const CellTable& cells, const PartTable& 
         m.cell_half.push_back(bc.half[id]);
         m.cell_reach.push_back(bc.reach[id]);
         m.cell_clamp.push_back(bc.clamp[id]);
+        m.cell_ball_radius.push_back(std::cbrt(3.0 * bc.vol[id] / (4.0 * std::numbers::pi)));
         m.cell_part.push_back(bc.part[id]);
         m.cell_body.push_back(b);
         m.cell_full.push_back(bc.full[id]);

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <vector>
 
 #include "cuboid.h"
@@ -37,8 +36,7 @@ double dot(const Vector& a, const Vector& b) {
 double cross_clamp(const Model& m, int t, int j) {
   auto boundary = [&](int c) { return !m.cell_full[c] && !m.cell_ball[c]; };
   if (!boundary(t) || !boundary(j)) return m.cell_clamp[t] + m.cell_clamp[j];
-  const double k = 3.0 / (4.0 * std::numbers::pi);
-  return std::max(m.cell_clamp[t] + m.cell_clamp[j], std::cbrt(k * m.cell_volume[t]) + std::cbrt(k * m.cell_volume[j]));
+  return std::max(m.cell_clamp[t] + m.cell_clamp[j], m.cell_ball_radius[t] + m.cell_ball_radius[j]);
 }
 
 // Correction (mean field - point dipole) for target cell t and a source cell j of another body,

@@ -159,6 +159,9 @@ struct Model {
   std::vector<Vec3> cell_half;           ///< (ncell x 3) half-edges of the cuboid cell, part frame, m
   std::vector<double> cell_reach;        ///< (ncell) radius of the cell's bounding sphere, m
   std::vector<double> cell_clamp;        ///< (ncell) half of the closest approach of two cells, m
+  /// (ncell) radius of the ball of the cell's material volume, (3 v / 4 pi)^(1/3), m: a boundary
+  /// cell's clamp radius in the induction's coupling across bodies (physics.md §7)
+  std::vector<double> cell_ball_radius;
   std::vector<int> cell_part;            ///< (ncell) part index
   std::vector<int> cell_body;            ///< (ncell) body index
   std::vector<std::uint8_t> cell_full;   ///< (ncell) 1 if the cuboid lies entirely inside its part
