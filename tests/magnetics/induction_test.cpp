@@ -220,14 +220,15 @@ TEST(Induction, TouchingSteelBallsStayBoundedAtEveryTurn) {
   EXPECT_LT(fmax, 3.0 * fmin);
 }
 
-// The same pair at 14 cells across (0.71 mm cells, the `high` preset's soft cells): with the
-// clamp across bodies at half a cell edge, whatever a boundary cell holds, the coupled operator
-// had a mode with a gain near 1 here, at theta 0.5 (the solve's), 5 um into each other: 2.3e7 N
-// and 1.3e10 A/m in one cell; in the paper's BowlSpheres at `high` 450 kN between two balls. The
-// clamp of two boundary cells is now where the balls of their volumes meet (physics.md §7). The
-// moment stays below the spheroid's bound, the pull within the growth of the contact force that
-// refining the cells brings (8 -> 14 across: 11 -> 18-20 N here), and within 25% between the
-// solve's tree at theta 0.5 and 0.3. (Under the linear law the pull of touching balls is not
+// The same pair at 14 cells across (0.71 mm cells, the `high` preset's soft cells), 5 um into
+// each other in 0.1 T: with the clamp across bodies at half a cell edge, whatever a boundary cell
+// holds, the coupled operator had a mode with a gain near 1. On this lattice it pulled with 58 /
+// 172 N at theta 0.5 / 0.3 (against 18 N at 8 across); with 0.714 mm cells 2.3e7 N and one cell at
+// 1.3e10 A/m; in the paper's BowlSpheres at `high` two balls pushed each other with 450 N. Two
+// boundary cells are now clamped at least where the balls of their volumes meet (physics.md §7).
+// The moment stays below the spheroid's bound, the pull within the growth of the contact force
+// that refining the cells brings (8 -> 14 across: 11 -> 18-20 N here), and within 25% between
+// the solve's tree at theta 0.5 and 0.3. (Under the linear law the pull of touching balls is not
 // converged in the cell size: the flux gathers at the contact point, physics.md §7.)
 TEST(Induction, TouchingSteelBallsAtFineCellsHaveNoSingularMode) {
   const double B0 = 0.1, d = 0.01 - 5e-6;
