@@ -2,9 +2,9 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
-#include <numbers>
 #include <cstdio>
 #include <functional>
+#include <numbers>
 #include <numeric>
 #include <stdexcept>
 #include <string>

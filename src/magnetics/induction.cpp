@@ -34,9 +34,10 @@ double dot(const Vector& a, const Vector& b) {
 // therefore clamped at the larger of the two distances; a pair with a full cell or an exact
 // ball keeps the lattice clamp, as in the force kernels.
 double cross_clamp(const Model& m, int t, int j) {
+  const double lattice = m.cell_clamp[t] + m.cell_clamp[j];
   auto boundary = [&](int c) { return !m.cell_full[c] && !m.cell_ball[c]; };
-  if (!boundary(t) || !boundary(j)) return m.cell_clamp[t] + m.cell_clamp[j];
-  return std::max(m.cell_clamp[t] + m.cell_clamp[j], m.cell_ball_radius[t] + m.cell_ball_radius[j]);
+  if (!boundary(t) || !boundary(j)) return lattice;
+  return std::max(lattice, m.cell_ball_radius[t] + m.cell_ball_radius[j]);
 }
 
 // Correction (mean field - point dipole) for target cell t and a source cell j of another body,
