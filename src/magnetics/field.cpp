@@ -328,7 +328,8 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
   BodyTree& tt = plan.target_tree;
   // Groups of a body's cells under one node (targets on cells); points grouped by space alone.
   std::vector<int> group_body;
-  if (t.cell.size() > 0 && t.cell[0] >= 0) {
+  const bool cell_targets = t.cell.size() > 0 && t.cell[0] >= 0;
+  if (cell_targets) {
     group_body.resize(ngroup);
     for (int g = 0; g < ngroup; ++g) group_body[g] = m.cell_body[t.cell[t.group_begin[g]]];
   }
@@ -411,6 +412,13 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
           continue;
         }
         const Vec3 origin = s.body_pose[body].position;
+        // Another body closer to the group than its own radius opens at other_body_theta.
+        double theta = opt.theta;
+        if (cell_targets && opt.other_body_theta > 0 && group_body[g] != body) {
+          const int root = m.body_root[body];
+          const double rb = m.node_radius[root];
+          if ((origin + s.node_offset[root] - gc).norm() - rb - gr < rb) theta = opt.other_body_theta;
+        }
         // A surface part that the group would open gives its exact field, and its cells none.
         constexpr int kMaxSurfaces = 16;
         int excl[kMaxSurfaces], nexcl = 0;
@@ -431,9 +439,9 @@ FieldPlan plan_field(const Model& m, const State& s, const Sources& src, const T
           if (nexcl > 0 && m.node_part[n] >= 0 && excluded(m.node_part[n])) continue;
           const double dn = (origin + s.node_offset[n] - gc).norm();
           const double rn = m.node_radius[n];
-          if ((nexcl == 0 || m.node_part[n] >= 0) && rn + gr < opt.theta * dn &&
+          if ((nexcl == 0 || m.node_part[n] >= 0) && rn + gr < theta * dn &&
               dn - rn - gr > opt.near_field * 2.0 * m.node_reach[n] &&
-              (src.spread.empty() || spread_ok(src.spread[n], 0.0, opt.theta, dn))) {
+              (src.spread.empty() || spread_ok(src.spread[n], 0.0, theta, dn))) {
             far[k].push_back({FieldPlan::kCellNode, n});  // the node acts as one dipole at its centre
             continue;
           }

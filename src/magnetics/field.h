@@ -25,6 +25,12 @@ struct FieldOptions {
   /// surface_charge.h). Only for sources that hold the permanent moments (State::total or
   /// State::permanent), since the surfaces carry the model's permanent magnetization.
   bool surfaces = false;
+  /// Opening angle of the cell nodes of another body than a target group's when that body's
+  /// bounding sphere comes closer to the group than its own radius (targets on cells only; point
+  /// targets, farther bodies, whole bodies and groups of bodies use theta; 0 = theta). The
+  /// induction solve opens such nodes at a smaller angle: where two soft bodies face each other
+  /// their magnetizations vary most (physics.md §7).
+  double other_body_theta = 0.0;
 };
 
 /// The interaction lists of one field evaluation (field.cpp's dual walk): which far groups of

@@ -14,6 +14,17 @@ namespace {
 
 using Vector = Eigen::VectorXd;  // 3 x ntarget, target order
 
+// Opening angle of the cell nodes of other bodies within their own radius of a target group, in
+// the induction's field walk, in units of its theta (FieldOptions::other_body_theta; farther
+// bodies, whole bodies and groups of bodies open as before). Where two soft bodies face each
+// other across a small gap their magnetizations vary most, and a node's dipole at its centre
+// misses that: two 5 mm chi-700 balls 0.5 mm apart (exact series, physics.md §10) were 7.5% short
+// at default with the full angle and are 5.8% short at 0.7 (5.6% with every pair direct); at 14
+// cells across 5.2% against 3.4% (1.8%); two touching balls at 0.833 mm cells 10.8 N against
+// 17.4 N (18.5 N). 0.7 as the force walk's induced pairs (kInducedTheta in forces.cpp). Cost and
+// measurements: bench/results/two_balls_2026-12-08.
+constexpr double kOtherBodyTheta = 0.7;
+
 // Newton iterations on a saturating magnetization law before the solve reports not converged.
 constexpr int kMaxNewtonIterations = 40;
 
@@ -21,6 +32,19 @@ double dot(const Vector& a, const Vector& b) {
   double s = 0;  // serial, fixed order: bit-identical for any thread count
   for (Eigen::Index q = 0; q < a.size(); ++q) s += a[q] * b[q];
   return s;
+}
+
+// Krylov vectors the automatic GMRES restart may keep (Settings::induction_restart = 0).
+constexpr double kKrylovBudgetBytes = 256.0 * 1024 * 1024;
+
+// GMRES restart length for n induced cells: the setting, or when it is 0 as many vectors of 3n
+// doubles as kKrylovBudgetBytes holds, within [50, induction_max_iterations]. BowlSpheres at
+// `high` (19,340 cells) stalled with 50 at a residual of 2e-4 after 300 iterations and converges
+// with 300 in 106 (bench/results/two_balls_2026-12-08).
+int gmres_restart(const Settings& st, int n) {
+  if (st.induction_restart > 0) return std::max(2, st.induction_restart);
+  const double fits = kKrylovBudgetBytes / (3.0 * sizeof(double) * std::max(n, 1));
+  return std::max(2, static_cast<int>(std::min<double>(std::max(50.0, fits), std::max(50, st.induction_max_iterations))));
 }
 
 // Clamp distance of cells t and j in the induction's coupling across bodies, m. A boundary cell
@@ -228,8 +252,10 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
     return rep;
   }
   // Point dipoles (near pairs are corrected below), with at most theta 0.5: the solve needs an
-  // operator close to the exact one (at theta 1 the tree error stalls GMRES).
-  const FieldOptions fopt{std::min(st.theta, 0.5), 0.0};
+  // operator close to the exact one (at theta 1 the tree error stalls GMRES). Other induced
+  // bodies' cells open at kOtherBodyTheta of that.
+  FieldOptions fopt{std::min(st.theta, 0.5), 0.0};
+  fopt.other_body_theta = kOtherBodyTheta * fopt.theta;
   build_near_rows(m, st, s);
   const auto& rows = s.induced_near;
 
@@ -254,6 +280,7 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
   std::vector<Vec3> B(n);
   FieldOptions popt = fopt;
   popt.surfaces = true;
+  popt.other_body_theta = 0.0;  // the magnets' field as the forces' and the field volumes' see it
   const FieldPlan pplan = plan_field(m, s, s.permanent, t, popt);
   stats.field_pairs += apply_field_plan(pplan, m, s, s.permanent, t, popt, B);
   Vector b(3 * n);
@@ -353,7 +380,7 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
   // relative residual tol; returns the iterations, sets the relative residual.
   auto gmres = [&](const Vector& rhs, Vector& x, double tol, double& residual) {
     const double rnorm = std::sqrt(dot(rhs, rhs));
-    const int restart = std::max(2, st.induction_restart);
+    const int restart = gmres_restart(st, n);
     std::vector<Vector> V(restart + 1);
     Eigen::MatrixXd H = Eigen::MatrixXd::Zero(restart + 1, restart);
     Vector cs(restart), sn(restart), g(restart + 1), r, w, z;

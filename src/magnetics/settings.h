@@ -41,7 +41,11 @@ struct Settings {
   /// Coupled induction: stop when the residual is below this fraction of the right-hand side.
   double induction_tolerance = 1e-7;
   int induction_max_iterations = 300;
-  int induction_restart = 50;  ///< GMRES restart length
+  /// GMRES restart length. 0 = automatic: as many Krylov vectors as 256 MiB holds (3 doubles per
+  /// induced cell each), at least 50 and at most induction_max_iterations. Clusters of touching
+  /// high-chi bodies at fine cells stall with 50 (physics.md §7); the basis only grows as far as
+  /// a solve iterates, so a solve that converges within 50 costs and gives the same either way.
+  int induction_restart = 0;
   /// Right-precondition GMRES with the model's factored intra-body blocks (Model::precond_lu),
   /// when it has them. The answer is the same to induction_tolerance; iterations are fewer.
   bool induction_preconditioner = true;

@@ -263,6 +263,45 @@ TEST(Induction, TouchingSteelBallsAtFineCellsHaveNoSingularMode) {
   EXPECT_NEAR(f_theta[0], f_theta[1], 0.25 * f_theta[1]);
 }
 
+// Four steel balls touching as a tetrahedron (5 µm into each other), the field oblique, at 12
+// cells across: a cluster of contacts that the per-ball preconditioner does not see. The
+// automatic GMRES restart (Settings::induction_restart = 0) keeps every Krylov vector of such a
+// solve; a restart of 50 (the fixed length before 2026-12-08) throws the basis away and needs
+// about twice the iterations for the same answer (BowlSpheres at `high`: 300 iterations
+// unconverged against 107, bench/results/two_balls_2026-12-08). Measured: 61 against 97.
+TEST(Induction, AutomaticRestartSolvesATouchingClusterInFewerIterations) {
+  Rig s;
+  for (int b = 0; b < 4; ++b) s.add(std::make_unique<geometry::SphereShape>(0.005), linear(700));
+  s.build(0.01 / 12);
+  const double d = 0.01 - 5e-6;  // centre distance of each pair
+  const Vec3 at[4] = {{0, 0, 0}, {d, 0, 0}, {d / 2, d * std::sqrt(3.0) / 2, 0},
+                      {d / 2, d * std::sqrt(3.0) / 6, d * std::sqrt(2.0 / 3.0)}};
+  for (int b = 0; b < 4; ++b) s.state.body_pose[b].position = at[b];
+  auto solve = [&](int restart) {
+    Settings st;
+    st.external_field = Vec3(0.1, 0.05, 0.02);
+    st.theta = 0.3;
+    st.induction_tolerance = 1e-6;
+    st.induction_restart = restart;
+    s.state.induced_moment.clear();  // cold start each time
+    Result r;
+    evaluate(s.model, st, s.state, r);
+    return r;
+  };
+  const Result automatic = solve(0), fifty = solve(50);
+  std::printf("tetrahedron of 4 touching balls, %zu cells: automatic restart %d iterations (residual %.1e), restart 50 "
+              "%d (%.1e)\n",
+              s.model.induced_cells.size(), automatic.induction.iterations, automatic.induction.residual,
+              fifty.induction.iterations, fifty.induction.residual);
+  EXPECT_TRUE(automatic.induction.converged);
+  EXPECT_TRUE(fifty.induction.converged);
+  EXPECT_GT(automatic.induction.iterations, 50);  // else the two runs are one and the same solve
+  EXPECT_LT(automatic.induction.iterations, 0.75 * fifty.induction.iterations);
+  // Both to a residual of 1e-6; contact forces follow the moments to a few 1e-3.
+  for (int b = 0; b < 4; ++b)
+    EXPECT_LT((automatic.force[b] - fifty.force[b]).norm(), 5e-3 * automatic.force[b].norm()) << b;
+}
+
 // The warm start is the previous moments as they stand in the world frame: induced moments follow
 // the field, not the body. Two one-cell soft cubes side by side, turned a quarter turn about the
 // vertical in place, are the same magnetic system, so the second solve starts converged; turning
