@@ -16,6 +16,10 @@
 # soft cells at the high preset, numbers against references; the same code runs instrumented in
 # Induction.*, Cells.*, Scene.SoftPartsGetTheirOwnCellsAcross and
 # SoftSphereSeries.FarSoftBallIsNotOneDipoleInTheBodyWalk (a 1633-cell graded ball).
+# So are TwoBallSeries.PullOfTwoSoftBallsAtEveryPreset (26 models, two with 2,880 soft cells at
+# high; 19 s in the normal build) and Induction.AutomaticRestartSolvesATouchingClusterInFewerIterations
+# (two solves of 4,544 cells, 8 s): the same evaluation and GMRES run instrumented in Induction.*
+# and SoftSphereSeries.FarSoftBallIsNotOneDipoleInTheBodyWalk.
 # So are three contact shots whose instrumented runs were the longest of the 2026-12-07 run
 # (580 s, 205 s, 125 s of its 1563 s; the whole stage, build included, took 41 minutes of CI's
 # 90): Contact.SteelBallSnappingOntoAMagnetSettles, Simulator.LiftOffHeightMatchesTheForceBalance,
@@ -30,7 +34,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build-asan}
 all=${2:-}
-slow='^(Contact\.SteelBallSnappingOntoAMagnetSettles|Simulator\.LiftOffHeightMatchesTheForceBalance|Contact\.CylinderTumblingOnABoxMagnetGainsNoEnergy|SoftReference\.CubeMomentAndSphereForceAtEveryPreset|SoftSphereSeries\.ForceOnASoftBallNextToABallMagnetAtEveryPreset|Contact\.SnappedCubesStayTogetherAndGainNoEnergy|Bake\.KillNineLeavesAReadableCacheWithEveryCompletedFrame|Bake\.SameCacheOnEmulatedIntelAndAmdCpus|Farm\.Slurm_.*|Usd\.BlenderImportsTheStageAndRendersIt)$'
+slow='^(Contact\.SteelBallSnappingOntoAMagnetSettles|Simulator\.LiftOffHeightMatchesTheForceBalance|Contact\.CylinderTumblingOnABoxMagnetGainsNoEnergy|SoftReference\.CubeMomentAndSphereForceAtEveryPreset|SoftSphereSeries\.ForceOnASoftBallNextToABallMagnetAtEveryPreset|TwoBallSeries\.PullOfTwoSoftBallsAtEveryPreset|Induction\.AutomaticRestartSolvesATouchingClusterInFewerIterations|Contact\.SnappedCubesStayTogetherAndGainNoEnergy|Bake\.KillNineLeavesAReadableCacheWithEveryCompletedFrame|Bake\.SameCacheOnEmulatedIntelAndAmdCpus|Farm\.Slurm_.*|Usd\.BlenderImportsTheStageAndRendersIt)$'
 never='^Bake\.SameCacheOnEmulatedIntelAndAmdCpus$'
 if [ ! -f "$build/build.ninja" ]; then
   cmake -S . -B "$build" -G Ninja -DMAGBAKE_SANITIZE=ON -DMAGBAKE_BUILD_BENCH=OFF >/dev/null
