@@ -40,7 +40,7 @@ constexpr double kKrylovBudgetBytes = 256.0 * 1024 * 1024;
 // GMRES restart length for n induced cells: the setting, or when it is 0 as many vectors of 3n
 // doubles as kKrylovBudgetBytes holds, within [50, induction_max_iterations]. BowlSpheres at
 // `high` (19,340 cells) stalled with 50 at a residual of 2e-4 after 300 iterations and converges
-// with 300 in 106 (bench/results/two_balls_2026-12-08).
+// with 300 in 107 (bench/results/two_balls_2026-12-08).
 int gmres_restart(const Settings& st, int n) {
   if (st.induction_restart > 0) return std::max(2, st.induction_restart);
   const double fits = kKrylovBudgetBytes / (3.0 * sizeof(double) * std::max(n, 1));
@@ -382,7 +382,9 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
     const double rnorm = std::sqrt(dot(rhs, rhs));
     const int restart = gmres_restart(st, n);
     std::vector<Vector> V(restart + 1);
-    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(restart + 1, restart);
+    // Not zeroed: the Arnoldi step writes H(0..j+1, j) before anything reads it, and the upper
+    // triangular solve reads only those (the automatic restart makes H up to 301 x 300).
+    Eigen::MatrixXd H(restart + 1, restart);
     Vector cs(restart), sn(restart), g(restart + 1), r, w, z;
     apply(x, r);
     r = rhs - r;
