@@ -44,7 +44,7 @@ constexpr double kKrylovBudgetBytes = 256.0 * 1024 * 1024;
 int gmres_restart(const Settings& st, int n) {
   if (st.induction_restart > 0) return std::max(2, st.induction_restart);
   const double fits = kKrylovBudgetBytes / (3.0 * sizeof(double) * std::max(n, 1));
-  return std::max(2, static_cast<int>(std::min<double>(std::max(50.0, fits), std::max(50, st.induction_max_iterations))));
+  return static_cast<int>(std::clamp(fits, 50.0, std::max(50.0, 1.0 * st.induction_max_iterations)));
 }
 
 // Clamp distance of cells t and j in the induction's coupling across bodies, m. A boundary cell
@@ -252,8 +252,8 @@ InductionReport solve_induction(const Model& m, const Settings& st, State& s, Ev
     return rep;
   }
   // Point dipoles (near pairs are corrected below), with at most theta 0.5: the solve needs an
-  // operator close to the exact one (at theta 1 the tree error stalls GMRES). Other induced
-  // bodies' cells open at kOtherBodyTheta of that.
+  // operator close to the exact one (at theta 1 the tree error stalls GMRES). The cell nodes of
+  // other induced bodies within their own radius of a target group open at kOtherBodyTheta of it.
   FieldOptions fopt{std::min(st.theta, 0.5), 0.0};
   fopt.other_body_theta = kOtherBodyTheta * fopt.theta;
   build_near_rows(m, st, s);

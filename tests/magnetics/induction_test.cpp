@@ -267,8 +267,8 @@ TEST(Induction, TouchingSteelBallsAtFineCellsHaveNoSingularMode) {
 // cells across: a cluster of contacts that the per-ball preconditioner does not see. The
 // automatic GMRES restart (Settings::induction_restart = 0) keeps every Krylov vector of such a
 // solve; a restart of 50 (the fixed length before 2026-12-08) throws the basis away and needs
-// about twice the iterations for the same answer (BowlSpheres at `high`: 300 iterations
-// unconverged against 107, bench/results/two_balls_2026-12-08). Measured: 61 against 97.
+// more iterations for the same answer (BowlSpheres at `high`: 300 iterations
+// unconverged against 107, bench/results/two_balls_2026-12-08). Measured: 62 against 101.
 TEST(Induction, AutomaticRestartSolvesATouchingClusterInFewerIterations) {
   Rig s;
   for (int b = 0; b < 4; ++b) s.add(std::make_unique<geometry::SphereShape>(0.005), linear(700));
